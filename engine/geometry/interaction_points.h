@@ -1,0 +1,33 @@
+// Interaction points between mesh faces of different objects (paper supplement §1).
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "engine/core/types.h"
+
+namespace dynscope {
+
+/// Close point pairs on faces of different objects. Pair p joins point_a[p] on face_a[p]
+/// (object object_a[p]) with point_b[p] on face_b[p]; each unordered pair is reported once with
+/// object_a < object_b. `face_pairs` lists the distinct (face_a, face_b) pairs.
+struct InteractionPoints {
+  Points point_a = Points(0, 3);
+  Points point_b = Points(0, 3);
+  std::vector<int32_t> face_a, face_b;
+  std::vector<int32_t> object_a, object_b;
+  std::vector<std::pair<int32_t, int32_t>> face_pairs;
+
+  size_t size() const { return face_a.size(); }
+};
+
+/// Samples points on every face (a barycentric lattice with `lattice` subdivisions per edge, i.e.
+/// (lattice+1)(lattice+2)/2 points), pairs samples of faces of different objects closer than
+/// `threshold` and returns them. `vertices` `[V,3]` are world positions, `faces` `[F,3]` index
+/// them, `face_object` `[F]` gives each face's object. Throws ValueError on inconsistent sizes.
+InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
+                                          const std::vector<int32_t>& face_object,
+                                          double threshold, int lattice = 3);
+
+}  // namespace dynscope

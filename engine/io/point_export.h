@@ -1,0 +1,21 @@
+// PLY and PCD export of a point state (position + object id per point) through PCL.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/core/types.h"
+
+namespace dynscope {
+
+/// Writes binary PLY with x, y, z (float) and label (object id). Throws ValueError on size
+/// mismatch, IoError if the file cannot be written.
+void export_points_ply(const std::string& path, const Points& points,
+                       const std::vector<int32_t>& object_ids);
+
+/// Writes binary PCD with fields x y z label. Same errors as export_points_ply.
+void export_points_pcd(const std::string& path, const Points& points,
+                       const std::vector<int32_t>& object_ids);
+
+}  // namespace dynscope
