@@ -1,0 +1,15 @@
+// Registration functions of the dynscope subcommands (one per *_command.cpp).
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace dynscope::app {
+
+/// `dynscope info FILE`: describe a scene file or a mesh.
+void add_info_command(CLI::App& app);
+/// `dynscope generate`: write ground-truth scenes with Bullet.
+void add_generate_command(CLI::App& app);
+
+}  // namespace dynscope::app

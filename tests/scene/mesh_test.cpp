@@ -1,0 +1,87 @@
+// Tests of mesh helpers and primitive shapes (closed, outward-facing, right size).
+#include "engine/scene/mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+namespace {
+
+// Signed volume by the divergence theorem: positive iff faces wind CCW seen from outside.
+double signed_volume(const Mesh& m) {
+  double v = 0;
+  for (Eigen::Index f = 0; f < m.num_faces(); ++f) {
+    const Vec3 a = m.vertices.row(m.faces(f, 0)).transpose();
+    const Vec3 b = m.vertices.row(m.faces(f, 1)).transpose();
+    const Vec3 c = m.vertices.row(m.faces(f, 2)).transpose();
+    v += a.dot(b.cross(c)) / 6.0;
+  }
+  return v;
+}
+
+// Every directed edge must appear exactly once and its reverse exactly once (closed, oriented).
+bool is_closed_oriented(const Mesh& m) {
+  std::map<std::pair<int, int>, int> edges;
+  for (Eigen::Index f = 0; f < m.num_faces(); ++f) {
+    for (int e = 0; e < 3; ++e) ++edges[{m.faces(f, e), m.faces(f, (e + 1) % 3)}];
+  }
+  for (const auto& [edge, count] : edges) {
+    if (count != 1) return false;
+    auto it = edges.find({edge.second, edge.first});
+    if (it == edges.end() || it->second != 1) return false;
+  }
+  return true;
+}
+
+TEST(MeshTest, BoxIsClosedOutwardWithRightAreaAndVolume) {
+  const Mesh box = make_box_mesh(Vec3(1, 2, 3));
+  EXPECT_EQ(box.num_vertices(), 8);
+  EXPECT_EQ(box.num_faces(), 12);
+  EXPECT_TRUE(is_closed_oriented(box));
+  EXPECT_NEAR(signed_volume(box), 6.0, 1e-12);
+  EXPECT_NEAR(box.area(), 2 * (2 + 3 + 6), 1e-12);
+}
+
+TEST(MeshTest, SphereIsClosedOutwardAndConvergesToBall) {
+  const Mesh sphere = make_sphere_mesh(2.0, 24, 48);
+  EXPECT_TRUE(is_closed_oriented(sphere));
+  EXPECT_NEAR(signed_volume(sphere), 4.0 / 3.0 * M_PI * 8, 0.5);
+  EXPECT_NEAR(sphere.area(), 4 * M_PI * 4, 0.5);
+  for (Eigen::Index i = 0; i < sphere.num_vertices(); ++i) {
+    EXPECT_NEAR(sphere.vertices.row(i).norm(), 2.0, 1e-12);
+  }
+}
+
+TEST(MeshTest, CylinderIsClosedOutward) {
+  const Mesh cyl = make_cylinder_mesh(1.0, 2.0, 64);
+  EXPECT_TRUE(is_closed_oriented(cyl));
+  EXPECT_NEAR(signed_volume(cyl), M_PI * 2.0, 0.02);
+}
+
+TEST(MeshTest, ScaledMultipliesComponentwise) {
+  const Mesh box = make_box_mesh(Vec3(1, 1, 1)).scaled(Vec3(2, 3, 4));
+  EXPECT_NEAR(signed_volume(box), 24.0, 1e-12);
+}
+
+TEST(MeshTest, ValidateRejectsBadIndicesAndNaN) {
+  Mesh m = make_box_mesh(Vec3(1, 1, 1));
+  m.faces(3, 1) = 8;
+  EXPECT_THROW(m.validate("box"), ValueError);
+  m = make_box_mesh(Vec3(1, 1, 1));
+  m.vertices(2, 0) = std::nan("");
+  try {
+    m.validate("my box");
+    FAIL();
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("my box"), std::string::npos);
+  }
+  EXPECT_THROW(make_sphere_mesh(1.0, 1, 2), ValueError);
+}
+
+}  // namespace
+}  // namespace dynscope
