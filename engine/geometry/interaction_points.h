@@ -23,11 +23,14 @@ struct InteractionPoints {
 };
 
 /// Samples points on every face (a barycentric lattice with `lattice` subdivisions per edge, i.e.
-/// (lattice+1)(lattice+2)/2 points), pairs samples of faces of different objects closer than
-/// `threshold` and returns them. `vertices` `[V,3]` are world positions, `faces` `[F,3]` index
-/// them, `face_object` `[F]` gives each face's object. Throws ValueError on inconsistent sizes.
+/// (lattice+1)(lattice+2)/2 points, corners included), pairs samples of faces of different objects
+/// strictly closer than `threshold` and returns them, ordered by the sample on face_a, then the
+/// sample on face_b (samples numbered face by face). The lattice spacing must be small against
+/// `threshold` for touching faces to be found. `vertices` `[V,3]` are world positions, `faces`
+/// `[F,3]` index them, `face_object` `[F]` gives each face's object id. Throws ValueError on
+/// inconsistent sizes, a bad face index, a non-finite vertex, threshold <= 0 or lattice < 1.
 InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
-                                          const std::vector<int32_t>& face_object,
-                                          double threshold, int lattice = 3);
+                                          const std::vector<int32_t>& face_object, double threshold,
+                                          int lattice = 3);
 
 }  // namespace dynscope

@@ -10,9 +10,9 @@ namespace dynscope {
 
 /// How points are drawn from object surfaces.
 struct PointCloudOptions {
-  double voxel = 0.05;       ///< Grid downsampling voxel edge (scene units).
-  double oversample = 8.0;   ///< Surface samples per voxel-face area (voxel²) before downsampling.
-  uint64_t seed = 0;         ///< Sampling seed.
+  double voxel = 0.05;      ///< Grid downsampling voxel edge (scene units).
+  double oversample = 8.0;  ///< Surface samples per voxel-face area (voxel²) before downsampling.
+  uint64_t seed = 0;        ///< Sampling seed.
 };
 
 /// Points that keep their identity over time: each has an object index and a rest-frame
@@ -24,15 +24,18 @@ struct ScenePointCloud {
   std::vector<int32_t> particle;   ///< `[N]` particle index for deformable objects, -1 if rigid.
 
   Eigen::Index size() const { return rest.rows(); }
-  /// World positions `[N,3]` at `frame` (rigid: pose applied; deformable: its particle).
+  /// World positions `[N,3]` at `frame` (rigid: pose applied; deformable: its particle). Throws
+  /// ValueError for a frame outside the scene or points that do not match the scene.
   Points positions(const Scene& scene, int frame) const;
   /// Number of points of object index `i`.
   int64_t count_of(int i) const;
 };
 
-/// Samples each object's scaled mesh uniformly by area and grid-downsamples it per object in the
-/// object frame, keeping the sample nearest each voxel centre. Deformable objects use their
-/// frame-0 particles (grid-downsampled) instead. Throws ValueError for bad options.
+/// Samples each object's scaled mesh uniformly by area (ceil(oversample · area / voxel²) samples,
+/// seeded with derive_seed(seed, object index)) and grid-downsamples it per object in the object
+/// frame, keeping the sample nearest each voxel centre. Deformable objects use their frame-0
+/// particles (grid-downsampled; `rest` then holds frame-0 world positions). Throws ValueError for
+/// bad options ("voxel", "oversample"), an invalid scene, or an object without surface area.
 ScenePointCloud build_point_cloud(const Scene& scene, const PointCloudOptions& options);
 
 }  // namespace dynscope
