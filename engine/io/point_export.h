@@ -9,12 +9,14 @@
 
 namespace dynscope {
 
-/// Writes binary PLY with x, y, z (float) and label (object id). Throws ValueError on size
-/// mismatch, IoError if the file cannot be written.
+/// Writes binary PLY with one vertex element: x, y, z (float32, `points` `[N,3]` rounded) and
+/// label (uint32, the object id), atomically (temporary file + rename). Throws ValueError on a
+/// size mismatch, no points or a negative id, IoError if the file cannot be written.
 void export_points_ply(const std::string& path, const Points& points,
                        const std::vector<int32_t>& object_ids);
 
-/// Writes binary PCD with fields x y z label. Same errors as export_points_ply.
+/// Writes binary PCD with fields x y z (float32) and label (uint32), atomically. Same errors as
+/// export_points_ply.
 void export_points_pcd(const std::string& path, const Points& points,
                        const std::vector<int32_t>& object_ids);
 

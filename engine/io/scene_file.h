@@ -1,4 +1,4 @@
-// HDF5 scene files: dynscope's Physion-modelled layout, and real Physion files (README "Scene file").
+// HDF5 scene files: dynscope's Physion-modelled layout and real Physion files (README).
 #pragma once
 
 #include <string>
@@ -19,7 +19,8 @@ void write_scene(const Scene& scene, const std::string& path);
 Scene read_scene(const std::string& path);
 
 /// Reads a Physion (TDW) HDF5 file: converts left-handed y-up to z-up (x,y,z)->(x,z,y),
-/// quaternions xyzw -> wxyz, applies `static/scale`, maps `static/target_id`/`zone_id` to roles.
+/// quaternions xyzw -> wxyz, applies `static/scale`, maps `static/target_id`/`zone_id` to roles;
+/// dt is 0.01 s (TDW's default physics step) unless the root has a `dt` attribute.
 /// Missing optional groups are tolerated; malformed required ones throw FormatError.
 Scene read_physion(const std::string& path);
 

@@ -1,0 +1,43 @@
+// Temporary file + rename, so that writers never leave partial files behind.
+#include "engine/io/temp_file.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+TempFile::TempFile(std::string target) : target_(std::move(target)) {
+  std::vector<char> name(target_.begin(), target_.end());
+  const char kSuffix[] = ".tmp-XXXXXX";
+  name.insert(name.end(), kSuffix, kSuffix + sizeof kSuffix);
+  const int fd = mkstemp(name.data());
+  if (fd < 0) {
+    throw IoError(
+        target_, std::string("cannot create a temporary file next to it: ") + std::strerror(errno));
+  }
+  // mkstemp creates the file with mode 0600; a scene or point file is an ordinary output.
+  fchmod(fd, 0644);
+  close(fd);
+  temp_ = name.data();
+}
+
+TempFile::~TempFile() {
+  if (!committed_) std::remove(temp_.c_str());
+}
+
+void TempFile::commit() {
+  if (std::rename(temp_.c_str(), target_.c_str()) != 0) {
+    throw IoError(target_,
+                  std::string("cannot rename the temporary file onto it: ") + std::strerror(errno));
+  }
+  committed_ = true;
+}
+
+}  // namespace dynscope
