@@ -1,6 +1,6 @@
 // HDF5 scene files: the dynscope layout (writer and reader) and format detection.
 //
-// Scene file layout (format_version 1; engine/io/SCENE_FORMAT.md has the same text with an
+// Scene file layout (format_version 1; README.md "Scene file format" has the same text with an
 // h5py example). Modelled on Physion's HDF5 files so that one reader opens both.
 //
 //   /  (root attributes)
