@@ -325,9 +325,21 @@ Group Group::open_file(const std::string& path) {
   return Group(std::move(file), path, "");
 }
 
+// Creation properties without modification times, so the same scene gives byte-identical files.
+static hid_t untimed_properties(hid_t cls) {
+  const hid_t plist = H5Pcreate(cls);
+  H5Pset_obj_track_times(plist, 0);
+  return plist;
+}
+
 Group Group::create_file(const std::string& path) {
   silence_errors();
-  Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  // The 1.8+ object format stores small groups compactly: per-frame groups would otherwise cost
+  // kilobytes each (files several times larger).
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS));
+  H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST);
+  Handle fcpl(untimed_properties(H5P_FILE_CREATE));  // the root group's header too
+  Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()));
   if (!file.valid()) throw IoError(path, with_hdf5_reason("cannot be created"));
   return Group(std::move(file), path, "");
 }
@@ -394,7 +406,8 @@ Group Group::group(const std::string& name) const {
 }
 
 Group Group::create_group(const std::string& name) const {
-  Handle g(H5Gcreate2(id(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  Handle gcpl(untimed_properties(H5P_GROUP_CREATE));
+  Handle g(H5Gcreate2(id(), name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT));
   if (!g.valid()) {
     throw IoError(file_, child_path(name) + ": " + with_hdf5_reason("cannot create group"));
   }
@@ -565,7 +578,8 @@ void Group::write_array(const std::string& name, hid_t file_type, hid_t mem_type
   Handle space(dims.empty()
                    ? H5Screate(H5S_SCALAR)
                    : H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
-  Handle ds(H5Dcreate2(id(), name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+  Handle dcpl(untimed_properties(H5P_DATASET_CREATE));
+  Handle ds(H5Dcreate2(id(), name.c_str(), file_type, space.get(), H5P_DEFAULT, dcpl.get(),
                        H5P_DEFAULT));
   if (!space.valid() || !ds.valid()) {
     throw IoError(file_, field + ": " + with_hdf5_reason("cannot create dataset"));

@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <thread>
 
 #include "engine/io/h5_util.h"
 #include "tests/io/io_test_util.h"
@@ -57,6 +61,23 @@ TEST(SceneFile, WriteThenReadIsExact) {
   expect_same_scene(scene, back);
   EXPECT_EQ(back.objects[2].rigid, false);
   EXPECT_TRUE(back.trajectories[2].poses.empty());
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+TEST(SceneFile, SameSceneGivesByteIdenticalFiles) {
+  TempDir dir;
+  const Scene scene = test::make_test_scene();
+  write_scene(scene, dir.file("a.h5"));
+  // HDF5 stamps objects with seconds-resolution times unless told not to; cross a second.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  write_scene(scene, dir.file("b.h5"));
+  const std::string a = file_bytes(dir.file("a.h5"));
+  EXPECT_FALSE(a.empty());
+  EXPECT_TRUE(a == file_bytes(dir.file("b.h5")));
 }
 
 TEST(SceneFile, WritesTheDocumentedLayout) {
