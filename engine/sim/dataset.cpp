@@ -1,0 +1,214 @@
+// Dataset generation: worker threads simulate seeded scenes, write HDF5 files and a JSON manifest.
+#include "engine/sim/dataset.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "engine/core/error.h"
+#include "engine/core/log.h"
+#include "engine/core/rng.h"
+#include "engine/io/mesh_import.h"
+#include "engine/io/scene_file.h"
+#include "engine/sim/scenario.h"
+
+namespace dynscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kManifestName = "manifest.json";
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  const std::string temp = path + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError(temp, "cannot be opened for writing");
+    out << text;
+    out.close();
+    if (!out) throw IoError(temp, "write failed");
+  }
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    throw IoError(path, "cannot replace file: " + ec.message());
+  }
+}
+
+// Sorted paths of the files in `dir` that assimp can import.
+std::vector<std::string> mesh_files_in(const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw IoError(dir, "mesh directory does not exist");
+  std::vector<std::string> files;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_regular_file(ec) && is_mesh_file(it->path().string())) {
+      files.push_back(it->path().string());
+    }
+  }
+  if (ec) throw IoError(dir, "cannot list directory: " + ec.message());
+  if (files.empty()) throw IoError(dir, "holds no mesh files (OBJ, PLY, STL, glTF, ...)");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string manifest_text(const DatasetOptions& options, const std::vector<std::string>& mesh_files,
+                          const DatasetSummary& summary) {
+  using nlohmann::json;
+  json m;
+  m["format"] = "dynscope-dataset";
+  m["format_version"] = 1;
+  m["scenario"] = options.scenario;
+  m["count"] = options.count;
+  m["seed"] = options.seed;
+  m["seed_rule"] = "scene i uses derive_seed(seed, i) (engine/core/rng.h)";
+  m["parameters"] = json::parse(scenario_parameters_json(options.scenario));
+  if (!mesh_files.empty()) m["meshes"] = mesh_files;
+  const bool labelled = scenario_has_contact_label(options.scenario);
+  if (labelled) {
+    m["label"] = "target_contacting_zone";
+    m["positives"] = summary.positives;
+  }
+  json files = json::array();
+  json split = {{"train", json::array()}, {"val", json::array()}, {"test", json::array()}};
+  for (const DatasetEntry& e : summary.entries) {
+    json f = {{"file", e.file},
+              {"index", e.index},
+              {"seed", e.seed},
+              {"split", e.split},
+              {"num_objects", e.num_objects}};
+    if (labelled) f["outcome"] = e.outcome;
+    files.push_back(f);
+    split[e.split].push_back(e.file);
+  }
+  m["files"] = files;
+  m["split"] = split;
+  m["split_rule"] = "index % 10: 0-7 train, 8 val, 9 test";
+  return m.dump(2) + "\n";
+}
+
+}  // namespace
+
+std::string scene_file_name(const std::string& scenario, int64_t index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%04lld.h5", static_cast<long long>(index));
+  return scenario + buf;
+}
+
+std::string split_of(int64_t index) {
+  const int64_t r = index % 10;
+  return r < 8 ? "train" : (r == 8 ? "val" : "test");
+}
+
+std::vector<Mesh> load_mesh_dir(const std::string& dir) {
+  std::vector<Mesh> meshes;
+  for (const std::string& f : mesh_files_in(dir)) meshes.push_back(import_mesh(f));
+  return meshes;
+}
+
+void check_dataset_options(const DatasetOptions& options) {
+  if (!is_scenario(options.scenario)) scenario_summary(options.scenario);  // throws, lists names
+  if (options.count <= 0) {
+    throw ValueError("count", "must be at least 1, got " + std::to_string(options.count));
+  }
+  if (options.jobs <= 0) {
+    throw ValueError("jobs", "must be at least 1, got " + std::to_string(options.jobs));
+  }
+  if (scenario_needs_meshes(options.scenario) && options.meshes_dir.empty()) {
+    throw ValueError("meshes", "scenario " + options.scenario + " needs --meshes DIR");
+  }
+  if (!scenario_needs_meshes(options.scenario) && !options.meshes_dir.empty()) {
+    throw ValueError("meshes", "only the movi-c scenario uses meshes, not " + options.scenario);
+  }
+  if (options.out_dir.empty()) throw ValueError("out", "output directory is empty");
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec || !fs::is_directory(options.out_dir)) {
+    throw IoError(options.out_dir,
+                  "cannot create output directory" + (ec ? ": " + ec.message() : std::string()));
+  }
+  const std::string probe = (fs::path(options.out_dir) / ".dynscope_write_test").string();
+  {
+    std::ofstream out(probe, std::ios::binary | std::ios::trunc);
+    if (!out || !(out << "x") || (out.close(), !out)) {
+      throw IoError(options.out_dir, "output directory is not writable");
+    }
+  }
+  fs::remove(probe, ec);
+}
+
+DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progress) {
+  check_dataset_options(options);
+  ScenarioOptions scenario_options;
+  std::vector<std::string> mesh_files;
+  if (!options.meshes_dir.empty()) {
+    scenario_options.meshes = load_mesh_dir(options.meshes_dir);
+    for (const std::string& f : mesh_files_in(options.meshes_dir)) {
+      mesh_files.push_back(fs::path(f).filename().string());
+    }
+  }
+  // Building one setup up front reports scenario-specific input errors before any thread starts.
+  scenario_setup(options.scenario, derive_seed(options.seed, 0), scenario_options);
+
+  const bool labelled = scenario_has_contact_label(options.scenario);
+  DatasetSummary summary;
+  summary.entries.resize(static_cast<size_t>(options.count));
+  std::atomic<int64_t> next{0};
+  std::atomic<int64_t> positives{0};
+  std::atomic<bool> failed{false};
+  std::mutex write_mutex, error_mutex;
+  std::exception_ptr error;
+  auto work = [&] {
+    while (!failed) {
+      const int64_t i = next++;
+      if (i >= options.count) return;
+      try {
+        DatasetEntry e;
+        e.index = i;
+        e.seed = derive_seed(options.seed, static_cast<uint64_t>(i));
+        e.file = scene_file_name(options.scenario, i);
+        e.split = split_of(i);
+        const Scene scene = generate_scene(options.scenario, e.seed, scenario_options);
+        e.num_objects = static_cast<int>(scene.objects.size());
+        if (labelled) e.outcome = contact_outcome(scene) ? 1 : 0;
+        {
+          // HDF5's C++ layer is not reentrant; the simulation, which dominates, stays parallel.
+          std::lock_guard<std::mutex> lock(write_mutex);
+          write_scene(scene, (fs::path(options.out_dir) / e.file).string());
+        }
+        if (e.outcome == 1) ++positives;
+        summary.entries[static_cast<size_t>(i)] = std::move(e);
+        if (progress) {
+          if (labelled) progress->set_status("positives " + std::to_string(positives.load()));
+          progress->advance();
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  const auto threads = static_cast<int>(std::min<int64_t>(options.jobs, options.count));
+  if (threads == 1) {
+    work();
+  } else {
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t) pool.emplace_back(work);
+    for (std::thread& t : pool) t.join();
+  }
+  if (error) std::rethrow_exception(error);
+  summary.positives = positives;
+  summary.manifest_path = (fs::path(options.out_dir) / kManifestName).string();
+  write_text_atomically(summary.manifest_path, manifest_text(options, mesh_files, summary));
+  log_debug("generate: wrote ", options.count, " scenes and ", summary.manifest_path);
+  return summary;
+}
+
+}  // namespace dynscope

@@ -1,0 +1,62 @@
+// Dataset generation: many seeded scenes of one scenario written as HDF5 files plus a manifest.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/core/progress.h"
+#include "engine/scene/mesh.h"
+
+namespace dynscope {
+
+/// What `dynscope generate` was asked for.
+struct DatasetOptions {
+  std::string scenario;    ///< One of scenario_names().
+  int64_t count = 0;       ///< Number of scenes, >= 1.
+  uint64_t seed = 0;       ///< Base seed; scene i uses derive_seed(seed, i).
+  std::string out_dir;     ///< Created if missing.
+  int jobs = 1;            ///< Worker threads, >= 1; results do not depend on it.
+  std::string meshes_dir;  ///< Mesh files for "movi-c"; must be empty for other scenarios.
+};
+
+/// One written scene.
+struct DatasetEntry {
+  std::string file;  ///< File name inside the output directory.
+  int64_t index = 0;
+  uint64_t seed = 0;
+  std::string split;  ///< "train", "val" or "test".
+  int num_objects = 0;
+  int outcome = -1;  ///< 1/0 = target touched the zone in some frame / never; -1 = no label.
+};
+
+/// What generate_dataset() wrote.
+struct DatasetSummary {
+  std::vector<DatasetEntry> entries;  ///< In index order.
+  std::string manifest_path;
+  int64_t positives = 0;  ///< Entries with outcome 1.
+};
+
+/// File name of scene `index`: "<scenario>_<index zero-padded to 4 digits>.h5".
+std::string scene_file_name(const std::string& scenario, int64_t index);
+
+/// Deterministic 80/10/10 split by index: index % 10 in 0..7 "train", 8 "val", 9 "test".
+std::string split_of(int64_t index);
+
+/// Loads every mesh file (sorted by name) of `dir` through import_mesh. Throws IoError if the
+/// directory cannot be read or holds no mesh file, or a file fails to import.
+std::vector<Mesh> load_mesh_dir(const std::string& dir);
+
+/// Checks every option before any work: known scenario, count >= 1, jobs >= 1, meshes only
+/// (and always) for "movi-c", and an output directory that can be created and written. Creates
+/// the output directory. Throws ValueError (bad option) or IoError (bad path) naming it.
+void check_dataset_options(const DatasetOptions& options);
+
+/// Generates `options.count` scenes on `options.jobs` threads, writes each to
+/// out_dir/scene_file_name() and then out_dir/manifest.json (scenario, count, base seed,
+/// per-file seed, split, outcome, generator parameters). The same options give identical files
+/// whatever `jobs` is. Reports each finished scene to `progress` if not null. Throws like
+/// check_dataset_options, or the first error a worker met (the files written so far remain).
+DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progress = nullptr);
+
+}  // namespace dynscope

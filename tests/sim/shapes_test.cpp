@@ -1,0 +1,138 @@
+// Tests of the shape parts: closed outward meshes, exact volumes and bounds, argument checks.
+#include "engine/sim/shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+namespace {
+
+// Every directed edge appears once and its reverse once: the mesh is closed and consistently
+// oriented.
+bool is_closed_oriented(const Mesh& m) {
+  std::map<std::pair<int, int>, int> edges;
+  for (Eigen::Index f = 0; f < m.num_faces(); ++f) {
+    for (int e = 0; e < 3; ++e) ++edges[{m.faces(f, e), m.faces(f, (e + 1) % 3)}];
+  }
+  for (const auto& [edge, count] : edges) {
+    if (count != 1) return false;
+    const auto it = edges.find({edge.second, edge.first});
+    if (it == edges.end() || it->second != 1) return false;
+  }
+  return true;
+}
+
+TEST(GridBoxMesh, ClosedOutwardWithExactVolumeAndSurfaceVertices) {
+  const Vec3 h(0.5, 1.0, 1.5);
+  const Mesh m = make_grid_box_mesh(h, 4);
+  EXPECT_TRUE(is_closed_oriented(m));
+  EXPECT_NEAR(mesh_volume(m), 8 * h.prod(), 1e-12);
+  // Welded lattice on the surface: 6 (n+1)^2 - 12 (n+1) + 8 vertices, 12 n^2 triangles.
+  EXPECT_EQ(m.num_vertices(), 6 * 25 - 12 * 5 + 8);
+  EXPECT_EQ(m.num_faces(), 12 * 16);
+  for (Eigen::Index i = 0; i < m.num_vertices(); ++i) {
+    const Vec3 p = m.vertices.row(i).transpose();
+    EXPECT_NEAR((p.cwiseAbs() - h).maxCoeff(), 0.0, 1e-12) << "vertex " << i << " not on a face";
+  }
+}
+
+TEST(GridCylinderMesh, ClosedOutwardInscribed) {
+  const Mesh m = make_grid_cylinder_mesh(0.3, 0.7, 32, 4, 2);
+  EXPECT_TRUE(is_closed_oriented(m));
+  const double exact = M_PI * 0.3 * 0.3 * 1.4;
+  // An inscribed 32-gon prism: area ratio sin(2pi/32) * 32 / (2 pi).
+  const double prism = 0.5 * 32 * std::sin(2 * M_PI / 32) * 0.3 * 0.3 * 1.4;
+  EXPECT_NEAR(mesh_volume(m), prism, 1e-12);
+  EXPECT_LT(mesh_volume(m), exact);
+  for (Eigen::Index i = 0; i < m.num_vertices(); ++i) {
+    EXPECT_LE(m.vertices.row(i).head<2>().norm(), 0.3 + 1e-12);
+    EXPECT_LE(std::abs(m.vertices(i, 2)), 0.7 + 1e-12);
+  }
+}
+
+TEST(WedgeMesh, ClosedOutwardWithPrismVolume) {
+  const Mesh m = make_wedge_mesh(0.8, 0.3, 0.2);
+  EXPECT_TRUE(is_closed_oriented(m));
+  EXPECT_NEAR(mesh_volume(m), 0.5 * 0.8 * 0.3 * 0.4, 1e-12);
+}
+
+TEST(MeshBuilders, RejectBadSizes) {
+  EXPECT_THROW(make_grid_box_mesh(Vec3(1, 0, 1)), ValueError);
+  EXPECT_THROW(make_grid_box_mesh(Vec3(1, 1, 1), 0), ValueError);
+  EXPECT_THROW(make_grid_cylinder_mesh(1, 1, 2), ValueError);
+  EXPECT_THROW(make_wedge_mesh(1, -1, 1), ValueError);
+}
+
+TEST(BodyVolume, MatchesFormulasWithScale) {
+  ShapePart box, sphere, cylinder;
+  sphere.kind = ShapeKind::kSphere;
+  cylinder.kind = ShapeKind::kCylinder;
+  EXPECT_NEAR(body_volume({box}, Vec3(1, 2, 3)), 8 * 6, 1e-12);
+  EXPECT_NEAR(body_volume({sphere}, Vec3::Constant(0.5)), 4.0 / 3.0 * M_PI * 0.125, 1e-12);
+  EXPECT_NEAR(body_volume({cylinder}, Vec3(0.5, 0.5, 2)), M_PI * 0.25 * 4, 1e-12);
+  ShapePart hull;
+  hull.kind = ShapeKind::kConvexHull;
+  hull.hull_mesh = make_grid_box_mesh(Vec3(1, 1, 1), 1);
+  EXPECT_NEAR(body_volume({hull}, Vec3(2, 2, 2)), 64, 1e-9);
+}
+
+TEST(BodyAabb, ContainsTheMeshAndIsTightForBoxes) {
+  ShapePart cylinder;
+  cylinder.kind = ShapeKind::kCylinder;
+  const Vec3 scale(0.4, 0.4, 1.0);
+  Pose pose;
+  pose.position = Vec3(1, 2, 3);
+  pose.rotation = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 0.5).normalized()));
+  const Aabb box = body_aabb({cylinder}, scale, pose);
+  const Aabb mesh_box = Aabb::of(pose.apply(body_mesh({cylinder}).scaled(scale).vertices));
+  EXPECT_TRUE((box.min.array() <= mesh_box.min.array() + 1e-12).all());
+  EXPECT_TRUE((box.max.array() >= mesh_box.max.array() - 1e-12).all());
+  // The 32-gon loses at most 1 - cos(pi/32) of the radius.
+  EXPECT_LT((mesh_box.min - box.min).maxCoeff(), 0.4 * (1 - std::cos(M_PI / 32)) + 1e-12);
+
+  ShapePart cube;
+  const Aabb cube_box = body_aabb({cube}, Vec3(1, 2, 3), pose);
+  const Aabb cube_mesh = Aabb::of(pose.apply(body_mesh({cube}).scaled(Vec3(1, 2, 3)).vertices));
+  EXPECT_TRUE(cube_box.min.isApprox(cube_mesh.min, 1e-12));
+  EXPECT_TRUE(cube_box.max.isApprox(cube_mesh.max, 1e-12));
+}
+
+TEST(BodyMesh, ConcatenatesPartsInTheBodyFrame) {
+  ShapePart a, b;
+  a.half_extents = Vec3(0.1, 0.1, 0.1);
+  b.half_extents = Vec3(0.1, 0.1, 0.1);
+  b.local.position = Vec3(1, 0, 0);
+  const Mesh m = body_mesh({a, b});
+  const Mesh single = part_mesh(a);
+  ASSERT_EQ(m.num_vertices(), 2 * single.num_vertices());
+  ASSERT_EQ(m.num_faces(), 2 * single.num_faces());
+  EXPECT_NEAR(m.vertices.bottomRows(single.num_vertices()).col(0).mean(), 1.0, 1e-12);
+  EXPECT_EQ(m.faces.bottomRows(single.num_faces()).minCoeff(), single.num_vertices());
+}
+
+TEST(CheckPart, NamesTheBodyForBadParts) {
+  ShapePart sphere;
+  sphere.kind = ShapeKind::kSphere;
+  try {
+    check_part(sphere, Vec3(1, 2, 1), "body 7 (ball)");
+    FAIL() << "non-uniform sphere accepted";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("body 7 (ball)"), std::string::npos);
+  }
+  ShapePart rotated;
+  rotated.local.rotation = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
+  EXPECT_THROW(check_part(rotated, Vec3(1, 2, 1), "b"), ValueError);
+  EXPECT_NO_THROW(check_part(rotated, Vec3(2, 2, 2), "b"));
+  ShapePart hull;
+  hull.kind = ShapeKind::kConvexHull;
+  EXPECT_THROW(check_part(hull, Vec3::Ones(), "b"), ValueError);
+  EXPECT_THROW(check_part(ShapePart{}, Vec3(1, -1, 1), "b"), ValueError);
+}
+
+}  // namespace
+}  // namespace dynscope
