@@ -12,4 +12,7 @@ void add_info_command(CLI::App& app);
 /// `dynscope generate`: write ground-truth scenes with Bullet.
 void add_generate_command(CLI::App& app);
 
+/// `dynscope render SCENE.h5 --out DIR`: headless PNG frames, contact sheet, optional MP4.
+void add_render_command(CLI::App& app);
+
 }  // namespace dynscope::app

@@ -1,0 +1,52 @@
+// Headless batch rendering of a scene file: PNG per frame, contact sheet, optional MP4.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "render/gl_context.h"
+#include "render/view_spec.h"
+
+namespace dynscope::render {
+
+/// Parses "a:b" (frames a .. b-1), "a:" (a to the end), ":b", or "a" (one frame) against a
+/// scene of `num_frames`; negative numbers count from the end. Returns [first, last] inclusive.
+/// Throws ValueError("--frames", ...) if malformed or empty/out of range.
+std::pair<int, int> parse_frame_range(const std::string& text, int num_frames);
+/// Parses "WxH" (e.g. "1280x720"); throws ValueError("--size", ...) if malformed or out of
+/// 1 .. 16384.
+std::pair<int, int> parse_image_size(const std::string& text);
+/// Full path of executable `name` found on $PATH, or "" if none.
+std::string find_on_path(const std::string& name);
+
+/// What `dynscope render` does.
+struct BatchRenderOptions {
+  std::string scene_path;
+  std::string view_path;  ///< Optional view spec JSON; defaults otherwise.
+  std::string frames;     ///< parse_frame_range syntax; empty = every frame.
+  int width = 0;          ///< Overrides the view's image size when > 0.
+  int height = 0;
+  std::string out_dir;
+  bool contact_sheet = true;
+  bool video = true;     ///< MP4 through ffmpeg when it is on PATH.
+  int samples = 4;       ///< Multisampling (anti-aliasing).
+  bool progress = true;  ///< Progress bar on stderr.
+};
+
+/// What was written.
+struct BatchRenderResult {
+  std::vector<std::string> frame_files;  ///< out_dir/frame_NNNN.png
+  std::string contact_sheet;             ///< out_dir/contact_sheet.png or ""
+  std::string video;                     ///< out_dir/render.mp4 or ""
+  std::string view_file;                 ///< out_dir/view.json: the resolved view (camera fixed)
+  std::vector<std::string> notes;        ///< e.g. why the MP4 was skipped
+};
+
+/// Reads the scene (dynscope::read_scene), renders the chosen frames with `context` (resized to
+/// the image size) and writes every output atomically into `out_dir` (created if needed). The
+/// camera, when fitted, covers all rendered frames so it stays still. Throws IoError/FormatError
+/// for an unreadable or corrupt scene or view (naming the file), ValueError for bad options.
+BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions& options);
+
+}  // namespace dynscope::render

@@ -1,0 +1,21 @@
+// Picks a concrete GlContext by name at run time (the only place that knows the backends).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "render/gl_context.h"
+
+namespace dynscope::render {
+
+/// Backend names accepted by create_context: "osmesa" (headless) and "glfw" (window).
+std::vector<std::string> context_backends();
+
+/// Creates and makes current a context of `backend` with a width x height framebuffer. A "glfw"
+/// window is shown only when `visible`. Throws ValueError for an unknown backend name and Error
+/// when the backend cannot create a context (so a front end can fall back to "osmesa").
+std::unique_ptr<GlContext> create_context(const std::string& backend, int width, int height,
+                                          bool visible = false);
+
+}  // namespace dynscope::render

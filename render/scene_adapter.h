@@ -1,0 +1,92 @@
+// Turns engine data (a Scene, or a rollout's true/predicted points) into RenderScenes
+// (the mjv_updateScene half: plain description in, no GL).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/geometry/point_cloud.h"
+#include "engine/scene/scene.h"
+#include "render/render_scene.h"
+#include "render/view_spec.h"
+
+namespace dynscope::render {
+
+/// Level-0 voxel for a scene when the view leaves it at 0: the paper's 0.2 for Kubric-scale
+/// (movi-*) scenes, 0.05 for Physion scale.
+double default_voxel(const Scene& scene);
+
+/// A ground grid under `bounds` (plane z = 0, or the lowest point if it lies below 0) with a
+/// round spacing; an empty box gives the default grid.
+GroundGrid grid_for_bounds(const Aabb& bounds);
+
+/// Everything derived once from a Scene to draw any of its frames: shared mesh geometry, the
+/// point cloud of every frame as one PointSeries, and the points of the view's U-Net level.
+/// Building it samples points, so it is done once per scene and view, not per frame.
+class SceneRenderData {
+ public:
+  /// Copies `scene` (validated; throws ValueError) and prepares what `view` asks for.
+  SceneRenderData(const Scene& scene, const ViewSpec& view);
+
+  int num_frames() const { return scene_.num_frames(); }
+  const Scene& scene() const { return scene_; }
+  /// Level-0 voxel edge used (view's, or default_voxel).
+  double voxel() const { return voxel_; }
+  /// Voxel edge of the view's level: voxel * 1.5^level (DESIGN §5).
+  double level_voxel() const;
+  /// Relational radius of the view's level (view's level-0 radius or 2 x voxel, times 1.5^level).
+  double level_radius() const;
+  /// Sphere radius used for points (view's, or 0.3 x level voxel).
+  float point_radius() const;
+  /// All level-0 points (identity kept over frames), `[N]` with object ids.
+  const ScenePointCloud& cloud() const { return cloud_; }
+  /// Indices into cloud() of the view's level (all points at level 0).
+  const std::vector<int32_t>& level_indices() const { return level_indices_; }
+  /// Bounds of every object over frames [first, last] (inclusive).
+  Aabb bounds(int first, int last) const;
+
+  /// The RenderScene of `frame` under `view` (same layers/level the data was built for; the
+  /// picked point indexes the level's points). Throws ValueError for a bad frame or picked point.
+  RenderScene frame(int frame, const ViewSpec& view) const;
+  /// Short captions of the layers shown (for image labels).
+  std::vector<std::string> legend(const ViewSpec& view) const;
+
+ private:
+  void add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const;
+  void add_interaction_points(RenderScene& out, int frame) const;
+
+  Scene scene_;
+  int level_ = 0;
+  double voxel_ = 0.05;
+  double radius0_ = 0.1;
+  float point_radius_ = 0.01f;
+  std::vector<std::shared_ptr<MeshGeometry>> geometry_;  ///< Per object (rigid: local frame).
+  ScenePointCloud cloud_;
+  std::vector<int32_t> level_indices_;
+  std::shared_ptr<PointSeries> cloud_series_;  ///< Level-0 points, all frames.
+  std::shared_ptr<PointSeries> level_series_;  ///< Level points, all frames.
+  std::vector<int32_t> level_object_;          ///< Object id per level point.
+};
+
+/// True and predicted point sets of a rollout, `[T,N,3]` each, as two series built once; the
+/// prediction carries per-point errors |pred - truth| as scalars.
+struct ComparisonSeries {
+  std::shared_ptr<PointSeries> truth;
+  std::shared_ptr<PointSeries> prediction;
+  float max_error = 0.0f;  ///< Over all frames and points.
+};
+
+/// Builds the comparison from per-frame point arrays of equal shapes and per-point object ids
+/// (`[N]`, used for categorical colours). Throws ValueError on shape mismatch.
+ComparisonSeries make_comparison_series(const std::vector<Points>& truth,
+                                        const std::vector<Points>& predicted,
+                                        const std::vector<int32_t>& object_ids);
+
+/// Appends the rollout's point layers for `frame` to `out` as `view.layers` asks: truth points,
+/// predicted points (categorical, or error through the colormap when `layers.error`), and a
+/// translucent ghost of the other set when `layers.ghost`. `radius` is the sphere radius.
+void add_comparison_layers(RenderScene& out, const ComparisonSeries& series, int frame,
+                           const ViewSpec& view, float radius);
+
+}  // namespace dynscope::render
