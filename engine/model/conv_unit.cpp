@@ -1,0 +1,93 @@
+// ConvUnit: bottleneck, convolution, residual.
+#include "engine/model/conv_unit.h"
+
+#include <torch/nn/functional/activation.h>
+
+#include <algorithm>
+#include <string>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+ConvUnitImpl::ConvUnitImpl(const ConvUnitOptions& options) : options_(options) {
+  if (options.in_channels() < 1 || options.out_channels() < 1 || options.bottleneck_divisor() < 1) {
+    throw ValueError("conv_unit", "invalid options: in " + std::to_string(options.in_channels()) +
+                                      ", out " + std::to_string(options.out_channels()));
+  }
+  mid_ = std::max<int64_t>(1, options.out_channels() / options.bottleneck_divisor());
+  reduce = register_module("reduce", torch::nn::Linear(options.in_channels(), mid_));
+  if (options.layer_norm()) {
+    reduce_norm =
+        register_module("reduce_norm", torch::nn::LayerNorm(torch::nn::LayerNormOptions({mid_})));
+  }
+  if (options.conv() == ConvKind::kPointConv) {
+    point_conv = register_module("conv", PointConv(PointConvOptions(mid_, mid_)
+                                                       .c_mid(options.c_mid())
+                                                       .pos_channels(options.pos_channels())
+                                                       .normalize(options.normalize())
+                                                       .position_scale(options.position_scale())));
+  } else if (options.conv() == ConvKind::kGnn) {
+    gnn_conv = register_module("conv", GnnConv(GnnConvOptions(mid_, mid_)
+                                                   .normalize(options.normalize())
+                                                   .position_scale(options.position_scale())));
+  } else {
+    mesh_conv =
+        register_module("conv", MeshRelationalConv(MeshRelationalConvOptions(mid_, mid_)
+                                                       .c_mid(options.c_mid())
+                                                       .pos_channels(options.pos_channels())
+                                                       .position_scale(options.position_scale())));
+  }
+  if (options.layer_norm()) {
+    conv_norm =
+        register_module("conv_norm", torch::nn::LayerNorm(torch::nn::LayerNormOptions({mid_})));
+  }
+  expand = register_module("expand", torch::nn::Linear(mid_, options.out_channels()));
+  if (options.in_channels() != options.out_channels()) {
+    shortcut = register_module(
+        "shortcut",
+        torch::nn::Linear(
+            torch::nn::LinearOptions(options.in_channels(), options.out_channels()).bias(false)));
+  }
+}
+
+torch::Tensor ConvUnitImpl::reduce_input(const torch::Tensor& x) {
+  torch::Tensor r = reduce->forward(x);
+  if (reduce_norm) r = reduce_norm->forward(r);
+  return torch::relu(r);
+}
+
+torch::Tensor ConvUnitImpl::finish(const torch::Tensor& conv_out,
+                                   const torch::Tensor& shortcut_in) {
+  torch::Tensor c = conv_norm ? conv_norm->forward(conv_out) : conv_out;
+  c = expand->forward(torch::relu(c));
+  const torch::Tensor s = shortcut ? shortcut->forward(shortcut_in) : shortcut_in;
+  return torch::relu(s + c);
+}
+
+torch::Tensor ConvUnitImpl::forward(const torch::Tensor& x, const torch::Tensor& source,
+                                    const torch::Tensor& query, const NeighborTensors& neighbors,
+                                    bool resample) {
+  if (mesh_conv) throw ValueError("conv_unit", "a mesh relational unit needs forward_mesh");
+  if (!resample && query.size(0) != source.size(0)) {
+    throw ValueError("conv_unit", "a non-resampling unit needs the query points to be the source");
+  }
+  const torch::Tensor r = reduce_input(x);
+  const torch::Tensor nearest = resample ? neighbors.nearest() : torch::Tensor();
+  torch::Tensor c;
+  if (point_conv) {
+    c = point_conv->forward(query, source, r, neighbors);
+  } else {
+    const torch::Tensor r_query = resample ? r.index_select(0, nearest) : r;
+    c = gnn_conv->forward(query, source, r, r_query, neighbors);
+  }
+  return finish(c, resample ? x.index_select(0, nearest) : x);
+}
+
+torch::Tensor ConvUnitImpl::forward_mesh(const torch::Tensor& x, const torch::Tensor& vertices,
+                                         const MeshTensors& mesh) {
+  if (!mesh_conv) throw ValueError("conv_unit", "forward_mesh needs a mesh relational unit");
+  return finish(mesh_conv->forward(reduce_input(x), vertices, mesh), x);
+}
+
+}  // namespace dynscope

@@ -1,0 +1,139 @@
+// DynamicsModel: input features, normalisation and the position update.
+#include "engine/model/dynamics_model.h"
+
+#include <torch/autograd.h>
+
+#include <cmath>
+#include <string>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+namespace {
+
+constexpr int64_t kInputFeatures = 7;  // v(t), v(t−1), z(t)
+
+torch::Tensor vec3_tensor(const Vec3& v) {
+  return torch::tensor(
+      {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())});
+}
+
+Vec3 tensor_vec3(const torch::Tensor& t) {
+  const torch::Tensor c = t.to(torch::kCPU, torch::kDouble).contiguous();
+  return Vec3(c[0].item<double>(), c[1].item<double>(), c[2].item<double>());
+}
+
+}  // namespace
+
+ModelInput make_model_input(const PointState& state, const Hierarchy& hierarchy,
+                            const torch::Device& device) {
+  state.validate();
+  if (hierarchy.levels.empty() || hierarchy.levels[0].points.rows() != state.size()) {
+    throw ValueError("hierarchy", "level 0 does not hold the state's " +
+                                      std::to_string(state.size()) + " points");
+  }
+  ModelInput in;
+  in.position = points_to_tensor(state.position, device);
+  in.velocity = points_to_tensor(state.velocity, device).to(torch::kFloat);
+  in.prev_velocity = points_to_tensor(state.prev_velocity, device).to(torch::kFloat);
+  in.hierarchy = to_tensors(hierarchy, device);
+  return in;
+}
+
+DynamicsModelImpl::DynamicsModelImpl(const ModelConfig& config) : config_(config) {
+  config.validate();
+  unet = register_module("unet", UNet(config, kInputFeatures, 3));
+  velocity_mean_ = register_buffer("velocity_mean", torch::zeros({3}));
+  velocity_std_ = register_buffer("velocity_std", torch::ones({3}));
+  target_mean_ = register_buffer("target_mean", torch::zeros({3}));
+  target_std_ = register_buffer("target_std", torch::ones({3}));
+  z_mean_ = register_buffer("z_mean", torch::zeros({1}));
+  z_std_ = register_buffer("z_std", torch::ones({1}));
+}
+
+torch::Tensor DynamicsModelImpl::forward(const ModelInput& input,
+                                         std::vector<BlockRecord>* record) {
+  const torch::Tensor v = (input.velocity - velocity_mean_) / velocity_std_;
+  const torch::Tensor v_prev = (input.prev_velocity - velocity_mean_) / velocity_std_;
+  const torch::Tensor z =
+      (input.position.narrow(1, 2, 1).to(torch::kFloat) - z_mean_) / z_std_;  // [N,1]
+  return unet->forward(torch::cat({v, v_prev, z}, 1), input.hierarchy, record);
+}
+
+torch::Tensor DynamicsModelImpl::predict_delta(const ModelInput& input) {
+  const torch::Tensor target = forward(input) * target_std_ + target_mean_;
+  return config_.target == TargetMode::kAcceleration ? input.velocity + target : target;
+}
+
+torch::Tensor DynamicsModelImpl::predict_positions(const ModelInput& input) {
+  return input.position + predict_delta(input).to(torch::kDouble);
+}
+
+torch::Tensor DynamicsModelImpl::normalize_target(const torch::Tensor& target) const {
+  return (target - target_mean_) / target_std_;
+}
+
+Hierarchy DynamicsModelImpl::build_hierarchy(const PointState& state) const {
+  state.validate();
+  const HierarchyOptions options = HierarchyOptions::from_config(config_);
+  if (config_.input == InputMode::kMesh) {
+    if (state.faces.rows() == 0) throw ValueError("point_state", "mesh input needs faces");
+    return build_mesh_hierarchy(state.position, state.object_ids, state.faces, options);
+  }
+  return dynscope::build_hierarchy(state.position, state.object_ids, options);
+}
+
+Points DynamicsModelImpl::predict_next(const PointState& state) {
+  state.validate();
+  torch::NoGradGuard no_grad;
+  const torch::Device device = velocity_mean_.device();
+  const ModelInput input = make_model_input(state, build_hierarchy(state), device);
+  const torch::Tensor delta = predict_delta(input).to(torch::kCPU, torch::kDouble).contiguous();
+  Points out = state.position;
+  out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);
+  return out;
+}
+
+NormStats DynamicsModelImpl::stats() const {
+  NormStats s;
+  s.velocity_mean = tensor_vec3(velocity_mean_);
+  s.velocity_std = tensor_vec3(velocity_std_);
+  s.target_mean = tensor_vec3(target_mean_);
+  s.target_std = tensor_vec3(target_std_);
+  s.z_mean = z_mean_.item<double>();
+  s.z_std = z_std_.item<double>();
+  return s;
+}
+
+void DynamicsModelImpl::set_stats(const NormStats& s) {
+  auto check_std = [](const char* name, double v) {
+    if (!(v > 0) || !std::isfinite(v)) {
+      throw ValueError(name,
+                       "standard deviation must be positive and finite, got " + std::to_string(v));
+    }
+  };
+  for (int c = 0; c < 3; ++c) {
+    check_std("velocity_std", s.velocity_std[c]);
+    check_std("target_std", s.target_std[c]);
+  }
+  check_std("z_std", s.z_std);
+  if (!s.velocity_mean.allFinite() || !s.target_mean.allFinite() || !std::isfinite(s.z_mean)) {
+    throw ValueError("norm_stats", "mean is not finite");
+  }
+  torch::NoGradGuard no_grad;
+  velocity_mean_.copy_(vec3_tensor(s.velocity_mean));
+  velocity_std_.copy_(vec3_tensor(s.velocity_std));
+  target_mean_.copy_(vec3_tensor(s.target_mean));
+  target_std_.copy_(vec3_tensor(s.target_std));
+  z_mean_.fill_(s.z_mean);
+  z_std_.fill_(s.z_std);
+}
+
+int64_t parameter_count(const torch::nn::Module& module) {
+  int64_t n = 0;
+  for (const auto& p : module.parameters()) n += p.numel();
+  return n;
+}
+
+}  // namespace dynscope

@@ -1,0 +1,72 @@
+// The U-Net's multi-level point hierarchy and its neighbour lists (plain data, no torch).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "engine/core/types.h"
+#include "engine/geometry/neighbors.h"
+#include "engine/model/mesh_interaction.h"
+#include "engine/model/model_config.h"
+
+namespace dynscope {
+
+/// How the hierarchy is built; from_config() takes the model's values.
+struct HierarchyOptions {
+  int levels = 4;                ///< Levels including level 0 (the input points).
+  double voxel = 0.075;          ///< Voxel edge of level 1; level l uses voxel·growth^(l−1).
+  double radius = 0.1;           ///< Relational radius of level 0; level l uses radius·growth^l.
+  double growth = 1.5;           ///< Per-level factor of voxel and radius.
+  int k = 16;                    ///< Neighbours of object / resampling / flat lists.
+  int k_relational = 16;         ///< Neighbours of relational lists before the radius filter.
+  bool object_centric = true;    ///< false: flat baseline (knn_all lists, no relational lists,
+                                 ///< downsampling ignores object ids).
+  bool point_relational = true;  ///< Build the point relational lists (false for mesh input,
+                                 ///< whose relational path runs through interaction points).
+  double interaction_threshold = 0.1;  ///< Mesh input: interaction distance.
+  int interaction_lattice = 3;         ///< Mesh input: lattice samples per face edge.
+
+  /// Options matching a model configuration (object_centric is false for ModelKind::kFlat).
+  static HierarchyOptions from_config(const ModelConfig& config);
+};
+
+/// One level: its points and every neighbour list a forward pass uses there.
+/// Lists index points of the level named in their comment; see NeighborList for the layout.
+struct HierarchyLevel {
+  Points points = Points(0, 3);     ///< `[N_l,3]` world positions.
+  std::vector<int32_t> object_ids;  ///< `[N_l]` object id of each point.
+  std::vector<int32_t> kept;  ///< `[N_l]` index of each point in level l−1 (empty at level 0).
+  double voxel = 0.0;         ///< Voxel edge that produced this level (0 at level 0).
+  double radius = 0.0;        ///< Relational radius at this level.
+  NeighborList same;          ///< Queries and sources: this level; same object (flat: any object).
+  NeighborList relational;    ///< Queries and sources: this level; other objects within `radius`
+                              ///< (empty for the flat baseline and for mesh input).
+  NeighborList down;  ///< Queries: this level; sources: level l−1 (downsampling; empty at 0).
+  NeighborList up;    ///< Queries: level l−1; sources: this level (upsampling; empty at 0).
+};
+
+/// Levels 0..L−1, finest first. Level l+1 keeps one point of level l per occupied voxel.
+struct Hierarchy {
+  std::vector<HierarchyLevel> levels;
+  /// The voxel grids are anchored at (min x, min y, 0) of the level-0 points, so translating a
+  /// scene in x and y selects the same points (z stays anchored at the floor, z = 0).
+  Vec3 grid_anchor = Vec3::Zero();
+  /// Mesh input only: interaction points between faces of level 0 (see MeshInteraction).
+  bool has_mesh = false;
+  MeshInteraction mesh;
+
+  int num_levels() const { return static_cast<int>(levels.size()); }
+};
+
+/// Builds the hierarchy of `points` `[N,3]` with `object_ids` `[N]`. Throws ValueError on size
+/// mismatch, no points, non-finite values or options out of range.
+Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
+                          const HierarchyOptions& options);
+
+/// The same over mesh vertices `[V,3]`, plus the interaction-point lists of `faces` `[F,3]` at
+/// level 0 (options.interaction_threshold, options.interaction_lattice, options.k_relational).
+/// Throws ValueError as build_hierarchy and for face indices out of range.
+Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t>& object_ids,
+                               const Faces& faces, const HierarchyOptions& options);
+
+}  // namespace dynscope

@@ -1,0 +1,66 @@
+// Efficient PointConv forward pass.
+#include "engine/model/point_conv.h"
+
+#include <torch/nn/modules/activation.h>
+
+#include <string>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+PointConvImpl::PointConvImpl(const PointConvOptions& options) : options_(options) {
+  if (options.in_channels() < 1 || options.out_channels() < 1 || options.c_mid() < 1 ||
+      options.weight_hidden() < 1 || options.pos_channels() < 0 ||
+      !(options.position_scale() > 0)) {
+    throw ValueError("point_conv", "invalid options: in " + std::to_string(options.in_channels()) +
+                                       ", out " + std::to_string(options.out_channels()) +
+                                       ", c_mid " + std::to_string(options.c_mid()));
+  }
+  const int64_t hidden = options.weight_hidden();
+  weightnet = register_module(
+      "weightnet", torch::nn::Sequential(torch::nn::Linear(3, hidden), torch::nn::ReLU(),
+                                         torch::nn::Linear(hidden, hidden), torch::nn::ReLU(),
+                                         torch::nn::Linear(hidden, options.c_mid())));
+  if (options.pos_channels() > 0) {
+    const int64_t pe = options.pos_channels();
+    pos_embed = register_module("pos_embed",
+                                torch::nn::Sequential(torch::nn::Linear(3, pe), torch::nn::ReLU(),
+                                                      torch::nn::Linear(pe, pe)));
+  }
+  const int64_t c_in = options.in_channels() + options.pos_channels();
+  linear =
+      register_module("linear", torch::nn::Linear(c_in * options.c_mid(), options.out_channels()));
+}
+
+torch::Tensor PointConvImpl::filter_weights(const torch::Tensor& query, const torch::Tensor& source,
+                                            const NeighborTensors& neighbors) {
+  const torch::Tensor rel =
+      relative_positions(query, source, neighbors.index, options_.position_scale());
+  return weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);
+}
+
+torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Tensor& source,
+                                     const torch::Tensor& features,
+                                     const NeighborTensors& neighbors) {
+  if (features.dim() != 2 || features.size(1) != options_.in_channels()) {
+    throw ValueError("point_conv",
+                     "expected features [N," + std::to_string(options_.in_channels()) + "], got " +
+                         std::to_string(features.dim() == 2 ? features.size(1) : -1) + " channels");
+  }
+  const int64_t m = neighbors.index.size(0);
+  const torch::Tensor rel =
+      relative_positions(query, source, neighbors.index, options_.position_scale());
+  torch::Tensor x = gather_neighbors(features, neighbors.index);  // [M,K,C_in]
+  if (pos_embed) x = torch::cat({x, pos_embed->forward(rel)}, -1);
+  const torch::Tensor h =
+      weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);  // [M,K,c_mid]
+  torch::Tensor agg = torch::matmul(h.transpose(1, 2), x);  // [M,c_mid,C]: Σ_k h_k x_kᵀ
+  const torch::Tensor count = neighbors.valid_count();
+  if (options_.normalize()) agg = agg / count.clamp_min(1.0).view({m, 1, 1});
+  const torch::Tensor y = linear->forward(agg.reshape({m, agg.size(1) * agg.size(2)}));
+  // Without neighbours there is nothing to convolve: the bias must not leak into the output.
+  return y * (count > 0).to(torch::kFloat).unsqueeze(1);
+}
+
+}  // namespace dynscope

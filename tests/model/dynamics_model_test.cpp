@@ -1,0 +1,177 @@
+// DynamicsModel: permutation equivariance, x/y translation invariance, position update,
+// statistics, small objects, and overfitting one transition.
+#include "engine/model/dynamics_model.h"
+
+#include <gtest/gtest.h>
+#include <torch/nn/functional/loss.h>
+#include <torch/optim/adam.h>
+#include <torch/types.h>
+#include <torch/utils.h>
+
+#include "engine/core/error.h"
+#include "tests/model/model_test_util.h"
+
+namespace dynscope {
+namespace {
+
+using testing::make_scene;
+using testing::make_state;
+using testing::tiny_config;
+
+NormStats some_stats() {
+  NormStats s;
+  s.velocity_mean = Vec3(0.001, -0.02, -0.04);
+  s.velocity_std = Vec3(0.01, 0.005, 0.02);
+  s.target_mean = Vec3(0.0, 0.0, -0.01);
+  s.target_std = Vec3(0.003, 0.003, 0.004);
+  s.z_mean = 0.2;
+  s.z_std = 0.1;
+  return s;
+}
+
+TEST(DynamicsModelTest, PermutingInputPointsPermutesPredictions) {
+  torch::manual_seed(1);
+  for (ModelKind kind : {ModelKind::kPointConv, ModelKind::kGnn, ModelKind::kFlat}) {
+    DynamicsModel model(tiny_config(kind));
+    model->set_stats(some_stats());
+    const auto scene = make_scene(3, 60, 1);
+    const PointState st = make_state(scene, 2);
+    const Points p = model->predict_next(st);
+
+    std::vector<int> perm(static_cast<size_t>(st.size()));
+    for (size_t i = 0; i < perm.size(); ++i)
+      perm[i] = static_cast<int>((i * 37 + 11) % perm.size());
+    PointState ps = st;
+    for (size_t i = 0; i < perm.size(); ++i) {
+      ps.position.row(i) = st.position.row(perm[i]);
+      ps.velocity.row(i) = st.velocity.row(perm[i]);
+      ps.prev_velocity.row(i) = st.prev_velocity.row(perm[i]);
+      ps.object_ids[i] = st.object_ids[static_cast<size_t>(perm[i])];
+    }
+    const Points q = model->predict_next(ps);
+    double worst = 0.0;
+    for (size_t i = 0; i < perm.size(); ++i) {
+      worst = std::max(worst, (q.row(i) - p.row(perm[i])).norm());
+    }
+    EXPECT_LT(worst, 1e-6) << to_string(kind);
+  }
+}
+
+TEST(DynamicsModelTest, TranslationInXYLeavesDisplacementUnchanged) {
+  torch::manual_seed(2);
+  for (ModelKind kind : {ModelKind::kPointConv, ModelKind::kGnn, ModelKind::kFlat}) {
+    DynamicsModel model(tiny_config(kind));
+    model->set_stats(some_stats());
+    const auto scene = make_scene(3, 60, 3);
+    const PointState st = make_state(scene, 4);
+    PointState moved = st;
+    moved.position.col(0).array() += 3.7;
+    moved.position.col(1).array() -= 12.25;
+    const Points d1 = model->predict_next(st) - st.position;
+    const Points d2 = model->predict_next(moved) - moved.position;
+    EXPECT_LT((d1 - d2).cwiseAbs().maxCoeff(), 1e-6) << to_string(kind);
+    // Height is an input: moving in z changes the prediction.
+    PointState lifted = st;
+    lifted.position.col(2).array() += 0.5;
+    const Points d3 = model->predict_next(lifted) - lifted.position;
+    EXPECT_GT((d1 - d3).cwiseAbs().maxCoeff(), 1e-7) << to_string(kind);
+  }
+}
+
+TEST(DynamicsModelTest, PositionUpdateFollowsTargetMode) {
+  torch::manual_seed(3);
+  const auto scene = make_scene(2, 40, 5);
+  const PointState st = make_state(scene, 6);
+  for (TargetMode mode : {TargetMode::kAcceleration, TargetMode::kVelocity}) {
+    ModelConfig c = tiny_config();
+    c.target = mode;
+    DynamicsModel model(c);
+    model->set_stats(some_stats());
+    torch::NoGradGuard no_grad;
+    const ModelInput in = make_model_input(st, model->build_hierarchy(st));
+    const torch::Tensor raw = model->forward(in);
+    const torch::Tensor target =
+        raw * torch::tensor({0.003f, 0.003f, 0.004f}) + torch::tensor({0.0f, 0.0f, -0.01f});
+    const torch::Tensor expected =
+        mode == TargetMode::kAcceleration ? in.velocity + target : target;
+    EXPECT_TRUE(torch::allclose(model->predict_delta(in), expected, 1e-5, 1e-7));
+    EXPECT_TRUE(torch::allclose(model->predict_positions(in),
+                                in.position + expected.to(torch::kDouble), 1e-6, 1e-8));
+    EXPECT_TRUE(torch::allclose(model->normalize_target(target), raw, 1e-4, 1e-5));
+  }
+}
+
+TEST(DynamicsModelTest, StatsRoundTripAndValidation) {
+  DynamicsModel model(tiny_config());
+  model->set_stats(some_stats());
+  const NormStats s = model->stats();
+  EXPECT_NEAR(s.velocity_std.y(), 0.005, 1e-9);
+  EXPECT_NEAR(s.z_mean, 0.2, 1e-7);
+  NormStats bad = some_stats();
+  bad.target_std.x() = 0.0;
+  EXPECT_THROW(model->set_stats(bad), ValueError);
+}
+
+TEST(DynamicsModelTest, ObjectWithFewerThanKPointsWorks) {
+  auto scene = make_scene(2, 50, 7);
+  scene.points.conservativeResize(102, 3);
+  scene.points.bottomRows(2) << 0.6, 0.1, 0.2, 0.62, 0.1, 0.21;
+  scene.ids.insert(scene.ids.end(), {77, 77});
+  DynamicsModel model(tiny_config());
+  const Points p = model->predict_next(make_state(scene, 8));
+  EXPECT_TRUE(p.allFinite());
+  EXPECT_EQ(p.rows(), 102);
+}
+
+TEST(DynamicsModelTest, RejectsMismatchedState) {
+  const auto scene = make_scene(2, 20, 9);
+  DynamicsModel model(tiny_config());
+  PointState st = make_state(scene, 1);
+  st.object_ids.pop_back();
+  EXPECT_THROW(model->predict_next(st), ValueError);
+}
+
+// Huber loss on p̂(t+1) for one rigid-ish transition must drop 100× under Adam.
+TEST(DynamicsModelTest, OverfitsOneTransition) {
+  torch::manual_seed(4);
+  // Tensors here are tiny: one thread avoids scheduling overhead on a shared 2-core machine.
+  const int threads = torch::get_num_threads();
+  torch::set_num_threads(1);
+  ModelConfig c = tiny_config();
+  c.width = 16;
+  const auto scene = make_scene(3, 60, 10);
+  const PointState st = make_state(scene, 11);
+  // Next positions: each object accelerates differently, plus a position-dependent swirl.
+  Points next = st.position + st.velocity;
+  for (Eigen::Index i = 0; i < st.size(); ++i) {
+    const double o = st.object_ids[static_cast<size_t>(i)] - 10;
+    next.row(i) += Eigen::RowVector3d(0.004 * o, -0.003 * (o - 1),
+                                      -0.01 + 0.02 * (st.position(i, 0) - 0.3 * o));
+  }
+  DynamicsModel model(c);
+  NormStatsAccumulator acc(c.target);
+  acc.add(st.position - st.velocity, st.position, next);
+  model->set_stats(acc.finish());
+  const ModelInput in = make_model_input(st, model->build_hierarchy(st));
+  const torch::Tensor truth = points_to_tensor(next);
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(1e-2));
+  auto loss_fn = [&] {
+    return torch::nn::functional::huber_loss(model->predict_positions(in), truth);
+  };
+  const double initial = loss_fn().item<double>();
+  double final_loss = initial;
+  int steps = 0;
+  for (; steps < 400 && final_loss > initial / 100.0; ++steps) {
+    adam.zero_grad();
+    const torch::Tensor loss = loss_fn();
+    loss.backward();
+    adam.step();
+    final_loss = loss.item<double>();
+  }
+  EXPECT_LT(final_loss, initial / 100.0) << "initial " << initial;
+  RecordProperty("adam_steps", steps);
+  torch::set_num_threads(threads);
+}
+
+}  // namespace
+}  // namespace dynscope

@@ -1,0 +1,141 @@
+// Hierarchy: level sizes, list invariants, small objects, translation, flat variant.
+#include "engine/model/hierarchy.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "engine/core/error.h"
+#include "tests/model/model_test_util.h"
+
+namespace dynscope {
+namespace {
+
+using testing::make_scene;
+
+HierarchyOptions small_options() {
+  HierarchyOptions o;
+  o.levels = 3;
+  o.voxel = 0.08;
+  o.radius = 0.1;
+  o.k = 8;
+  o.k_relational = 8;
+  return o;
+}
+
+// Every valid entry indexes the source and respects the object rule; masked entries are −1.
+void check_list(const NeighborList& nb, const HierarchyLevel& query, const HierarchyLevel& source,
+                bool same_object) {
+  ASSERT_EQ(nb.rows(), query.points.rows());
+  for (Eigen::Index i = 0; i < nb.rows(); ++i) {
+    for (Eigen::Index j = 0; j < nb.k(); ++j) {
+      if (!nb.mask(i, j)) {
+        EXPECT_EQ(nb.index(i, j), -1);
+        continue;
+      }
+      const int32_t s = nb.index(i, j);
+      ASSERT_GE(s, 0);
+      ASSERT_LT(s, source.points.rows());
+      EXPECT_EQ(source.object_ids[s] == query.object_ids[i], same_object);
+    }
+  }
+}
+
+TEST(HierarchyTest, LevelsShrinkAndListsAreConsistent) {
+  const auto scene = make_scene(3, 120, 1);
+  const HierarchyOptions o = small_options();
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+  ASSERT_EQ(h.num_levels(), 3);
+  EXPECT_EQ(h.levels[0].points.rows(), 360);
+  EXPECT_DOUBLE_EQ(h.levels[1].voxel, 0.08);
+  EXPECT_DOUBLE_EQ(h.levels[2].voxel, 0.12);
+  EXPECT_DOUBLE_EQ(h.levels[2].radius, 0.225);
+  for (int l = 1; l < 3; ++l) {
+    const HierarchyLevel& lv = h.levels[l];
+    const HierarchyLevel& prev = h.levels[l - 1];
+    EXPECT_LT(lv.points.rows(), prev.points.rows());
+    ASSERT_EQ(lv.kept.size(), static_cast<size_t>(lv.points.rows()));
+    // Every object survives downsampling.
+    EXPECT_EQ(std::set<int32_t>(lv.object_ids.begin(), lv.object_ids.end()).size(), 3u);
+    for (Eigen::Index i = 0; i < lv.points.rows(); ++i) {
+      EXPECT_EQ(lv.points.row(i), prev.points.row(lv.kept[i]));
+      // A kept point's nearest source in the level below is itself.
+      EXPECT_EQ(lv.down.index(i, 0), lv.kept[i]);
+    }
+    check_list(lv.down, lv, prev, true);
+    check_list(lv.up, prev, lv, true);
+  }
+  for (const HierarchyLevel& lv : h.levels) {
+    check_list(lv.same, lv, lv, true);
+    check_list(lv.relational, lv, lv, false);
+    int with_relations = 0;
+    for (Eigen::Index i = 0; i < lv.relational.rows(); ++i) {
+      for (Eigen::Index j = 0; j < lv.relational.k(); ++j) {
+        if (!lv.relational.mask(i, j)) continue;
+        EXPECT_LE((lv.points.row(i) - lv.points.row(lv.relational.index(i, j))).norm(),
+                  lv.radius + 1e-12);
+      }
+      with_relations += lv.relational.valid_count(i) > 0;
+    }
+    EXPECT_GT(with_relations, 0);
+  }
+}
+
+TEST(HierarchyTest, ObjectWithFewerThanKPointsIsMaskedNotPadded) {
+  auto scene = make_scene(2, 60, 2);
+  // A third object with 3 points.
+  scene.points.conservativeResize(123, 3);
+  scene.points.bottomRows(3) << 0.7, 0.0, 0.1, 0.72, 0.01, 0.1, 0.71, 0.03, 0.12;
+  scene.ids.insert(scene.ids.end(), {99, 99, 99});
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, small_options());
+  const HierarchyLevel& l0 = h.levels[0];
+  for (Eigen::Index i = 120; i < 123; ++i) {
+    EXPECT_EQ(l0.same.valid_count(i), 3);
+    EXPECT_EQ(l0.same.index(i, 3), -1);
+  }
+}
+
+TEST(HierarchyTest, TranslationInXYSelectsTheSamePoints) {
+  const auto scene = make_scene(3, 100, 3);
+  Points moved = scene.points;
+  moved.col(0).array() += 1.37;
+  moved.col(1).array() -= 2.91;
+  const Hierarchy a = build_hierarchy(scene.points, scene.ids, small_options());
+  const Hierarchy b = build_hierarchy(moved, scene.ids, small_options());
+  for (int l = 1; l < 3; ++l) {
+    EXPECT_EQ(a.levels[l].kept, b.levels[l].kept) << "level " << l;
+    EXPECT_EQ(a.levels[l].down.index, b.levels[l].down.index);
+    EXPECT_EQ(a.levels[l].relational.index, b.levels[l].relational.index);
+  }
+}
+
+TEST(HierarchyTest, FlatVariantUsesPlainKnnWithoutRelationalLists) {
+  const auto scene = make_scene(3, 80, 4);
+  HierarchyOptions o = small_options();
+  o.object_centric = false;
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+  bool crosses_objects = false;
+  for (const HierarchyLevel& lv : h.levels) {
+    EXPECT_EQ(lv.relational.rows(), 0);
+    for (Eigen::Index i = 0; i < lv.same.rows(); ++i) {
+      EXPECT_EQ(lv.same.valid_count(i), 8);
+      for (Eigen::Index j = 0; j < 8; ++j) {
+        crosses_objects |= lv.object_ids[lv.same.index(i, j)] != lv.object_ids[i];
+      }
+    }
+  }
+  EXPECT_TRUE(crosses_objects);
+}
+
+TEST(HierarchyTest, RejectsBadInput) {
+  const auto scene = make_scene(1, 10, 5);
+  std::vector<int32_t> short_ids(scene.ids.begin(), scene.ids.end() - 1);
+  EXPECT_THROW(build_hierarchy(scene.points, short_ids, small_options()), ValueError);
+  HierarchyOptions o = small_options();
+  o.levels = 0;
+  EXPECT_THROW(build_hierarchy(scene.points, scene.ids, o), ValueError);
+  EXPECT_THROW(build_hierarchy(Points(0, 3), {}, small_options()), ValueError);
+}
+
+}  // namespace
+}  // namespace dynscope
