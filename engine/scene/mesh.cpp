@@ -20,6 +20,17 @@ Eigen::VectorXd Mesh::face_areas() const {
 
 double Mesh::area() const { return face_areas().sum(); }
 
+double Mesh::volume() const {
+  double v = 0;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    const Vec3 a = vertices.row(faces(f, 0)).transpose();
+    const Vec3 b = vertices.row(faces(f, 1)).transpose();
+    const Vec3 c = vertices.row(faces(f, 2)).transpose();
+    v += a.dot(b.cross(c)) / 6.0;
+  }
+  return v;
+}
+
 Mesh Mesh::scaled(const Vec3& scale) const {
   Mesh out = *this;
   for (Eigen::Index i = 0; i < out.vertices.rows(); ++i) {

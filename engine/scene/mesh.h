@@ -18,6 +18,8 @@ struct Mesh {
 
   /// Total surface area (scene units squared).
   double area() const;
+  /// Signed enclosed volume (divergence theorem); positive for a closed mesh with outward faces.
+  double volume() const;
   /// Area of each face, `[F]`.
   Eigen::VectorXd face_areas() const;
   /// A copy with every vertex multiplied component-wise by `scale`.

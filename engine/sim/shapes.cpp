@@ -235,17 +235,6 @@ Mesh body_mesh(const std::vector<ShapePart>& parts) {
   return out;
 }
 
-double mesh_volume(const Mesh& mesh) {
-  double v = 0;
-  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const Vec3 a = mesh.vertices.row(mesh.faces(f, 0)).transpose();
-    const Vec3 b = mesh.vertices.row(mesh.faces(f, 1)).transpose();
-    const Vec3 c = mesh.vertices.row(mesh.faces(f, 2)).transpose();
-    v += a.dot(b.cross(c)) / 6.0;
-  }
-  return v;
-}
-
 double body_volume(const std::vector<ShapePart>& parts, const Vec3& scale) {
   double total = 0;
   for (const ShapePart& raw : parts) {
@@ -262,7 +251,7 @@ double body_volume(const std::vector<ShapePart>& parts, const Vec3& scale) {
         total += M_PI * h.x() * h.x() * 2.0 * h.z();
         break;
       case ShapeKind::kConvexHull:
-        total += std::abs(mesh_volume(p.hull_mesh));
+        total += std::abs(p.hull_mesh.volume());
         break;
     }
   }

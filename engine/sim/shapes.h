@@ -73,7 +73,4 @@ double body_volume(const std::vector<ShapePart>& parts, const Vec3& scale);
 /// spheres and cylinders, vertex bounds for hulls).
 Aabb body_aabb(const std::vector<ShapePart>& parts, const Vec3& scale, const Pose& pose);
 
-/// Volume enclosed by a closed, outward-oriented mesh (divergence theorem; scene units³).
-double mesh_volume(const Mesh& mesh);
-
 }  // namespace dynscope

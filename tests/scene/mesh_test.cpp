@@ -12,18 +12,6 @@
 namespace dynscope {
 namespace {
 
-// Signed volume by the divergence theorem: positive iff faces wind CCW seen from outside.
-double signed_volume(const Mesh& m) {
-  double v = 0;
-  for (Eigen::Index f = 0; f < m.num_faces(); ++f) {
-    const Vec3 a = m.vertices.row(m.faces(f, 0)).transpose();
-    const Vec3 b = m.vertices.row(m.faces(f, 1)).transpose();
-    const Vec3 c = m.vertices.row(m.faces(f, 2)).transpose();
-    v += a.dot(b.cross(c)) / 6.0;
-  }
-  return v;
-}
-
 // Every directed edge must appear exactly once and its reverse exactly once (closed, oriented).
 bool is_closed_oriented(const Mesh& m) {
   std::map<std::pair<int, int>, int> edges;
@@ -43,14 +31,14 @@ TEST(MeshTest, BoxIsClosedOutwardWithRightAreaAndVolume) {
   EXPECT_EQ(box.num_vertices(), 8);
   EXPECT_EQ(box.num_faces(), 12);
   EXPECT_TRUE(is_closed_oriented(box));
-  EXPECT_NEAR(signed_volume(box), 6.0, 1e-12);
+  EXPECT_NEAR(box.volume(), 6.0, 1e-12);
   EXPECT_NEAR(box.area(), 2 * (2 + 3 + 6), 1e-12);
 }
 
 TEST(MeshTest, SphereIsClosedOutwardAndConvergesToBall) {
   const Mesh sphere = make_sphere_mesh(2.0, 24, 48);
   EXPECT_TRUE(is_closed_oriented(sphere));
-  EXPECT_NEAR(signed_volume(sphere), 4.0 / 3.0 * M_PI * 8, 0.5);
+  EXPECT_NEAR(sphere.volume(), 4.0 / 3.0 * M_PI * 8, 0.5);
   EXPECT_NEAR(sphere.area(), 4 * M_PI * 4, 0.5);
   for (Eigen::Index i = 0; i < sphere.num_vertices(); ++i) {
     EXPECT_NEAR(sphere.vertices.row(i).norm(), 2.0, 1e-12);
@@ -60,12 +48,12 @@ TEST(MeshTest, SphereIsClosedOutwardAndConvergesToBall) {
 TEST(MeshTest, CylinderIsClosedOutward) {
   const Mesh cyl = make_cylinder_mesh(1.0, 2.0, 64);
   EXPECT_TRUE(is_closed_oriented(cyl));
-  EXPECT_NEAR(signed_volume(cyl), M_PI * 2.0, 0.02);
+  EXPECT_NEAR(cyl.volume(), M_PI * 2.0, 0.02);
 }
 
 TEST(MeshTest, ScaledMultipliesComponentwise) {
   const Mesh box = make_box_mesh(Vec3(1, 1, 1)).scaled(Vec3(2, 3, 4));
-  EXPECT_NEAR(signed_volume(box), 24.0, 1e-12);
+  EXPECT_NEAR(box.volume(), 24.0, 1e-12);
 }
 
 TEST(MeshTest, ValidateRejectsBadIndicesAndNaN) {

@@ -31,7 +31,7 @@ TEST(GridBoxMesh, ClosedOutwardWithExactVolumeAndSurfaceVertices) {
   const Vec3 h(0.5, 1.0, 1.5);
   const Mesh m = make_grid_box_mesh(h, 4);
   EXPECT_TRUE(is_closed_oriented(m));
-  EXPECT_NEAR(mesh_volume(m), 8 * h.prod(), 1e-12);
+  EXPECT_NEAR(m.volume(), 8 * h.prod(), 1e-12);
   // Welded lattice on the surface: 6 (n+1)^2 - 12 (n+1) + 8 vertices, 12 n^2 triangles.
   EXPECT_EQ(m.num_vertices(), 6 * 25 - 12 * 5 + 8);
   EXPECT_EQ(m.num_faces(), 12 * 16);
@@ -47,8 +47,8 @@ TEST(GridCylinderMesh, ClosedOutwardInscribed) {
   const double exact = M_PI * 0.3 * 0.3 * 1.4;
   // An inscribed 32-gon prism: area ratio sin(2pi/32) * 32 / (2 pi).
   const double prism = 0.5 * 32 * std::sin(2 * M_PI / 32) * 0.3 * 0.3 * 1.4;
-  EXPECT_NEAR(mesh_volume(m), prism, 1e-12);
-  EXPECT_LT(mesh_volume(m), exact);
+  EXPECT_NEAR(m.volume(), prism, 1e-12);
+  EXPECT_LT(m.volume(), exact);
   for (Eigen::Index i = 0; i < m.num_vertices(); ++i) {
     EXPECT_LE(m.vertices.row(i).head<2>().norm(), 0.3 + 1e-12);
     EXPECT_LE(std::abs(m.vertices(i, 2)), 0.7 + 1e-12);
@@ -58,7 +58,7 @@ TEST(GridCylinderMesh, ClosedOutwardInscribed) {
 TEST(WedgeMesh, ClosedOutwardWithPrismVolume) {
   const Mesh m = make_wedge_mesh(0.8, 0.3, 0.2);
   EXPECT_TRUE(is_closed_oriented(m));
-  EXPECT_NEAR(mesh_volume(m), 0.5 * 0.8 * 0.3 * 0.4, 1e-12);
+  EXPECT_NEAR(m.volume(), 0.5 * 0.8 * 0.3 * 0.4, 1e-12);
 }
 
 TEST(MeshBuilders, RejectBadSizes) {
