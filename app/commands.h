@@ -15,4 +15,7 @@ void add_generate_command(CLI::App& app);
 /// `dynscope render SCENE.h5 --out DIR`: headless PNG frames, contact sheet, optional MP4.
 void add_render_command(CLI::App& app);
 
+/// `dynscope view [SCENE.h5]`: the interactive viewer, or a headless UI screenshot.
+void add_view_command(CLI::App& app);
+
 }  // namespace dynscope::app

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   dynscope::app::add_info_command(app);
   dynscope::app::add_generate_command(app);
   dynscope::app::add_render_command(app);
+  dynscope::app::add_view_command(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,138 @@
+// Panel computations of the viewer (no GL): picked point, neighbourhood, contacts, level counts.
+#include "app/viewer/scene_inspection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/core/error.h"
+#include "engine/geometry/neighbors.h"
+#include "engine/model/hierarchy.h"
+#include "engine/model/model_config.h"
+
+namespace dynscope::app::viewer {
+namespace {
+
+void check_point(const render::SceneRenderData& data, int level_point) {
+  const int n = static_cast<int>(data.level_indices().size());
+  if (level_point < 0 || level_point >= n) {
+    throw ValueError("picked_point", std::to_string(level_point) + " is outside the " +
+                                         std::to_string(n) + " points of the level");
+  }
+}
+
+void check_frame(const Scene& scene, int frame) {
+  if (frame < 0 || frame >= scene.num_frames()) {
+    throw ValueError("frame", std::to_string(frame) + " is outside [0, " +
+                                  std::to_string(scene.num_frames()) + ")");
+  }
+}
+
+std::vector<int32_t> level_objects(const render::SceneRenderData& data) {
+  std::vector<int32_t> ids;
+  ids.reserve(data.level_indices().size());
+  for (int32_t i : data.level_indices()) ids.push_back(data.cloud().object_id[i]);
+  return ids;
+}
+
+}  // namespace
+
+Points level_positions(const render::SceneRenderData& data, int frame) {
+  check_frame(data.scene(), frame);
+  const Points all = data.cloud().positions(data.scene(), frame);
+  const std::vector<int32_t>& idx = data.level_indices();
+  Points out(static_cast<Eigen::Index>(idx.size()), 3);
+  for (size_t i = 0; i < idx.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = all.row(idx[i]);
+  return out;
+}
+
+PointInfo inspect_point(const render::SceneRenderData& data, int level_point, int frame) {
+  check_point(data, level_point);
+  check_frame(data.scene(), frame);
+  const Scene& scene = data.scene();
+  PointInfo info;
+  info.level_point = level_point;
+  info.cloud_point = data.level_indices()[level_point];
+  info.object_id = data.cloud().object_id[info.cloud_point];
+  info.object_name = scene.objects[data.cloud().object[info.cloud_point]].name;
+  auto at = [&](int f) -> Vec3 {
+    return data.cloud().positions(scene, f).row(info.cloud_point).transpose();
+  };
+  info.position = at(frame);
+  const int prev = std::max(0, frame - 1), next = std::min(scene.num_frames() - 1, frame + 1);
+  if (next > prev) info.velocity = (at(next) - at(prev)) / ((next - prev) * scene.dt_s);
+  return info;
+}
+
+Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_point, int frame,
+                                int k) {
+  check_point(data, level_point);
+  if (k < 1) throw ValueError("neighbors", std::to_string(k) + " must be at least 1");
+  const Points positions = level_positions(data, frame);
+  const std::vector<int32_t> ids = level_objects(data);
+  const Points query = positions.row(level_point);
+  const std::vector<int32_t> query_id = {ids[level_point]};
+  Neighborhood out;
+  out.k = k;
+  out.radius = data.level_radius();
+  auto collect = [&](const NeighborList& list, std::vector<NeighborEntry>& into) {
+    for (Eigen::Index j = 0; j < list.index.cols(); ++j) {
+      const int32_t p = list.index(0, j);
+      if (!list.mask(0, j) || p == level_point) continue;
+      into.push_back({p, ids[p], (positions.row(p) - query).norm()});
+    }
+    std::sort(into.begin(), into.end(), [](const NeighborEntry& a, const NeighborEntry& b) {
+      return a.distance < b.distance;
+    });
+  };
+  collect(knn_same_object(query, query_id, positions, ids, k), out.object);
+  collect(knn_other_objects(query, query_id, positions, ids, k, out.radius), out.relational);
+  return out;
+}
+
+std::vector<double> contact_distances(const Scene& scene, const ScenePointCloud& cloud) {
+  const int target = scene.find_role(Role::kTarget), zone = scene.find_role(Role::kZone);
+  if (target < 0 || zone < 0 || cloud.size() == 0) return {};
+  std::vector<Eigen::Index> target_rows, zone_rows;
+  for (Eigen::Index i = 0; i < cloud.size(); ++i) {
+    if (cloud.object[i] == target) target_rows.push_back(i);
+    if (cloud.object[i] == zone) zone_rows.push_back(i);
+  }
+  if (target_rows.empty() || zone_rows.empty()) return {};
+  std::vector<double> out;
+  out.reserve(scene.num_frames());
+  for (int f = 0; f < scene.num_frames(); ++f) {
+    const Points p = cloud.positions(scene, f);
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index a : target_rows) {
+      for (Eigen::Index b : zone_rows) best = std::min(best, (p.row(a) - p.row(b)).squaredNorm());
+    }
+    out.push_back(std::sqrt(best));
+  }
+  return out;
+}
+
+std::string hierarchy_preset(const Scene& scene) {
+  return scene.scenario.rfind("movi", 0) == 0 ? "kubric" : "physion";
+}
+
+std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& cloud, int frame) {
+  check_frame(scene, frame);
+  const HierarchyOptions options =
+      HierarchyOptions::from_config(ModelConfig::preset(hierarchy_preset(scene)));
+  const Hierarchy h = build_hierarchy(cloud.positions(scene, frame), cloud.object_id, options);
+  std::vector<LevelCount> out;
+  for (int l = 0; l < h.num_levels(); ++l) {
+    const HierarchyLevel& level = h.levels[l];
+    LevelCount c;
+    c.level = l;
+    c.voxel = level.voxel;
+    c.radius = level.radius;
+    c.points = static_cast<int>(level.points.rows());
+    for (int32_t id : level.object_ids) ++c.per_object[id];
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+}  // namespace dynscope::app::viewer

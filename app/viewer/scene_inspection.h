@@ -1,0 +1,79 @@
+// What the viewer's panels show about a scene: picked point, neighbourhoods, contacts, U-Net
+// levels.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/core/types.h"
+#include "engine/geometry/point_cloud.h"
+#include "engine/scene/scene.h"
+#include "render/scene_adapter.h"
+
+namespace dynscope::app::viewer {
+
+/// One point of the shown U-Net level at one frame.
+struct PointInfo {
+  int level_point = -1;  ///< Index into SceneRenderData::level_indices().
+  int cloud_point = -1;  ///< Index into the level-0 cloud.
+  int32_t object_id = -1;
+  std::string object_name;
+  Vec3 position = Vec3::Zero();  ///< World, scene units.
+  Vec3 velocity = Vec3::Zero();  ///< World, units/s: central difference of neighbouring frames
+                                 ///< (one-sided at the ends, zero for a single frame).
+};
+
+/// Position and velocity of level point `level_point` at `frame`. Throws ValueError for a point
+/// or frame out of range.
+PointInfo inspect_point(const render::SceneRenderData& data, int level_point, int frame);
+
+/// World positions `[N_level,3]` of the level points at `frame` (throws ValueError for a bad
+/// frame).
+Points level_positions(const render::SceneRenderData& data, int frame);
+
+/// One neighbour of a picked point.
+struct NeighborEntry {
+  int point = -1;  ///< Level point index.
+  int32_t object_id = -1;
+  double distance = 0.0;  ///< Scene units.
+};
+
+/// The picked point's neighbours as the model's convolutions see them at the shown level: the
+/// object kNN (same object, the point itself excluded) and relational neighbours (other objects
+/// within `radius`), both nearest first. Matches the edges SceneRenderData draws.
+struct Neighborhood {
+  int k = 0;
+  double radius = 0.0;
+  std::vector<NeighborEntry> object;
+  std::vector<NeighborEntry> relational;
+};
+
+/// Neighbourhood of `level_point` at `frame` with `k` neighbours and the data's level radius.
+/// Throws ValueError for a point or frame out of range or k < 1.
+Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_point, int frame,
+                                int k);
+
+/// Minimum distance between the target's and the zone's points per frame, `[T]` (scene units), from
+/// the level-0 `cloud` of `scene`; empty when the scene has no target or no zone.
+std::vector<double> contact_distances(const Scene& scene, const ScenePointCloud& cloud);
+
+/// "kubric" for movi-* scenarios, else "physion": the ModelConfig preset whose hierarchy the level
+/// browser shows.
+std::string hierarchy_preset(const Scene& scene);
+
+/// Points of one U-Net level, in total and per object id.
+struct LevelCount {
+  int level = 0;
+  double voxel = 0.0;   ///< Voxel edge that produced the level (0 at level 0).
+  double radius = 0.0;  ///< Relational radius at the level.
+  int points = 0;
+  std::map<int32_t, int> per_object;
+};
+
+/// Builds the model's hierarchy (build_hierarchy with the scene's preset) over `cloud` at `frame`
+/// and counts its points per level and object. Throws ValueError for a bad frame or empty cloud.
+std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& cloud, int frame);
+
+}  // namespace dynscope::app::viewer

@@ -1,0 +1,257 @@
+// Tests of the viewer with the null platform: scrubbing, keys, playback, picking, view specs,
+// errors.
+#include "app/viewer/viewer_app.h"
+
+#include <gtest/gtest.h>
+#include <imgui.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "engine/core/error.h"
+#include "engine/io/scene_file.h"
+#include "render/image.h"
+#include "render/png_io.h"
+#include "render/renderer.h"
+#include "render/view_spec.h"
+#include "viewer_test_util.h"
+
+namespace dynscope::app::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::HeadlessViewer;
+using testing::kHeight;
+using testing::kWidth;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("dynscope_viewer_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// The level point nearest the eye among those projecting into the free part of the window (not
+// under the panels), with its pixel: nothing can hide it.
+int visible_point(const ViewerApp& app, Vec3* pixel) {
+  const Points p = level_positions(*app.document().data, app.current_frame());
+  int best = -1;
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const Vec3 s = app.camera().project(p.row(i).transpose(), kWidth, kHeight);
+    if (s.x() < 400 || s.x() > kWidth - 10 || s.y() < 10 || s.y() > kHeight - 80) continue;
+    if (best < 0 || s.z() < pixel->z()) {
+      best = static_cast<int>(i);
+      *pixel = s;
+    }
+  }
+  return best;
+}
+
+TEST(ViewerApp, ScrubbingShowsTheFramesDataWithoutUploads) {
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.frame();
+  const int64_t uploads = v.app.upload_count();
+  const SceneDocument& doc = v.app.document();
+  for (int k : {10, 25, 59}) {
+    v.app.set_frame(k);
+    v.app.frame();
+    EXPECT_EQ(v.app.current_frame(), k);
+    const PointInfo info = inspect_point(*doc.data, 3, v.app.current_frame());
+    const Vec3 expected = doc.data->cloud().positions(doc.scene, k).row(info.cloud_point);
+    EXPECT_NEAR((info.position - expected).norm(), 0.0, 1e-12) << "frame " << k;
+  }
+  // Point series and meshes are uploaded once; scrubbing changes only the frame drawn. (A picked
+  // point's neighbourhood adds a few one-frame series per frame; none is shown here.)
+  EXPECT_EQ(v.app.upload_count(), uploads);
+  v.app.set_frame(1000);
+  EXPECT_EQ(v.app.current_frame(), 59);
+  v.app.set_frame(-4);
+  EXPECT_EQ(v.app.current_frame(), 0);
+}
+
+TEST(ViewerApp, ScrubbedFrameIsWhatIsDrawn) {
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.set_ui_visible(false);
+  v.app.set_frame(0);
+  v.app.frame();
+  const render::Image first = v.app.read_pixels();
+  v.app.set_frame(40);
+  v.app.frame();
+  const render::Image later = v.app.read_pixels();
+  // The probe has moved: the images differ; going back reproduces frame 0 exactly.
+  EXPECT_LT(render::compare_images(later, first, 8).fraction_within, 0.999);
+  v.app.set_frame(0);
+  v.app.frame();
+  EXPECT_EQ(render::compare_images(v.app.read_pixels(), first, 0).max_difference, 0);
+}
+
+TEST(ViewerApp, KeyboardStepsAndPlays) {
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.frame();
+  v.platform.press_key(ImGuiKey_RightArrow);
+  v.app.frame();
+  v.app.frame();  // the key is released again: one step only
+  EXPECT_EQ(v.app.current_frame(), 1);
+  v.platform.press_key(ImGuiKey_End);
+  v.app.frame();
+  EXPECT_EQ(v.app.current_frame(), 59);
+  v.platform.press_key(ImGuiKey_LeftArrow);
+  v.app.frame();
+  EXPECT_EQ(v.app.current_frame(), 58);
+  v.platform.press_key(ImGuiKey_Home);
+  v.app.frame();
+  EXPECT_EQ(v.app.current_frame(), 0);
+  // Space plays: 30 fps scene, 60 fps display, speed 1: one scene frame per two display frames.
+  v.platform.press_key(ImGuiKey_Space);
+  for (int i = 0; i < 20; ++i) v.app.frame();
+  EXPECT_NEAR(v.app.current_frame(), 10, 1);
+  v.platform.press_key(ImGuiKey_Space);
+  v.app.frame();
+  const int paused = v.app.current_frame();
+  for (int i = 0; i < 10; ++i) v.app.frame();
+  EXPECT_EQ(v.app.current_frame(), paused);
+}
+
+TEST(ViewerApp, ClickingAProjectedPointSelectsIt) {
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.set_frame(12);
+  v.app.frame();
+  v.app.frame();
+  Vec3 pixel;
+  const int point = visible_point(v.app, &pixel);
+  ASSERT_GE(point, 0);
+  v.platform.move_mouse(static_cast<float>(pixel.x()), static_cast<float>(pixel.y()));
+  v.app.frame();
+  v.platform.set_button(0, true);
+  v.app.frame();
+  v.platform.set_button(0, false);
+  v.app.frame();
+  EXPECT_EQ(v.app.selected_point(), point);
+  EXPECT_TRUE(v.app.layers().neighborhoods);
+  // Same through pick() at another level: the index is the level's.
+  v.app.set_level(1);
+  EXPECT_EQ(v.app.selected_point(), -1);
+  const int level_point = visible_point(v.app, &pixel);
+  ASSERT_GE(level_point, 0);
+  EXPECT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(v.app.selected_point(), level_point);
+  // Empty sky picks nothing and keeps the selection.
+  EXPECT_FALSE(v.app.pick(kWidth - 2, 2));
+  EXPECT_EQ(v.app.selected_point(), level_point);
+}
+
+TEST(ViewerApp, DraggingOrbitsInsteadOfPicking) {
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.frame();
+  const double yaw = v.app.camera().yaw_deg;
+  v.platform.move_mouse(600, 300);
+  v.app.frame();
+  v.platform.set_button(0, true);
+  v.app.frame();
+  for (int i = 1; i <= 5; ++i) {
+    v.platform.move_mouse(600.0f + 10.0f * i, 300);
+    v.app.frame();
+  }
+  v.platform.set_button(0, false);
+  v.app.frame();
+  EXPECT_NE(v.app.camera().yaw_deg, yaw);
+  EXPECT_EQ(v.app.selected_point(), -1);
+  const double distance = v.app.camera().distance;
+  v.platform.scroll(2.0f);
+  v.app.frame();
+  EXPECT_NEAR(v.app.camera().distance, distance * 0.81, 1e-9);
+}
+
+TEST(ViewerApp, SavedViewRendersTheSameThroughTheRenderPath) {
+  const fs::path dir = temp_dir("view");
+  render::Image viewer_image;
+  {
+    HeadlessViewer v;
+    v.app.open_scene(testing::collide_scene());
+    v.app.set_level(1);
+    v.app.set_frame(15);
+    v.app.select_point(5);
+    v.app.layers().voxels = true;
+    v.app.set_ui_visible(false);
+    v.app.frame();
+    viewer_image = v.app.read_pixels();
+    v.app.save_view((dir / "view.json").string());
+  }
+  const render::ViewSpec view = render::load_view_spec((dir / "view.json").string());
+  EXPECT_EQ(view.frame, 15);
+  EXPECT_EQ(view.level, 1);
+  EXPECT_EQ(view.picked_point, 5);
+  EXPECT_EQ(view.width, kWidth);
+  EXPECT_FALSE(view.camera.fit);
+  const Scene scene = read_scene(testing::collide_scene());
+  const render::SceneRenderData data(scene, view);
+  render::GlContext& context = testing::osmesa(view.width, view.height);
+  render::Renderer renderer(context, 4);
+  const render::Image rendered =
+      renderer.render_image(data.frame(view.frame, view), view.camera.camera);
+  const render::ImageComparison c = render::compare_images(rendered, viewer_image, 2);
+  EXPECT_GE(c.fraction_within, 0.999) << "max difference " << c.max_difference;
+
+  // Reopening the saved view reproduces it.
+  HeadlessViewer again;
+  again.app.open_scene(testing::collide_scene());
+  again.app.open_view((dir / "view.json").string());
+  EXPECT_EQ(render::view_spec_to_json(again.app.current_view()), render::view_spec_to_json(view));
+}
+
+TEST(ViewerApp, BadFilesGiveClearErrorsAndKeepTheScene) {
+  const fs::path dir = temp_dir("bad");
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  const std::string missing = (dir / "missing.h5").string();
+  try {
+    v.app.open_scene(missing);
+    FAIL() << "no error for a missing file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.h5"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "garbage.h5") << "not hdf5";
+  EXPECT_THROW(v.app.open_scene((dir / "garbage.h5").string()), Error);
+  std::ofstream(dir / "bad.json") << "{\"frame\": \"x\"}";
+  try {
+    v.app.open_view((dir / "bad.json").string());
+    FAIL() << "no error for a bad view";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "far.json") << "{\"frame\": 500}";
+  EXPECT_THROW(v.app.open_view((dir / "far.json").string()), ValueError);
+  EXPECT_TRUE(v.app.has_scene());
+  EXPECT_EQ(v.app.document().path, testing::collide_scene());
+  EXPECT_EQ(v.app.current_frame(), 0);
+  EXPECT_THROW(v.app.select_point(100000), ValueError);
+  EXPECT_THROW(v.app.set_level(7), ValueError);
+  // An action failing inside a frame becomes the popup's message, never an exception.
+  v.app.request_screenshot((dir / "no_such_dir" / "shot.png").string());
+  EXPECT_NO_THROW(v.app.frame());
+  EXPECT_NE(v.app.last_error().find("shot.png"), std::string::npos) << v.app.last_error();
+  EXPECT_NO_THROW(v.app.frame());
+}
+
+TEST(ViewerApp, ScreenshotWritesTheWholeWindow) {
+  const fs::path dir = temp_dir("shot");
+  HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.frame();
+  v.app.request_screenshot((dir / "shot.png").string());
+  v.app.frame();
+  const render::Image shot = render::read_png((dir / "shot.png").string());
+  EXPECT_EQ(shot.width, kWidth);
+  EXPECT_EQ(shot.height, kHeight);
+  EXPECT_EQ(render::compare_images(shot, v.app.read_pixels(), 0).max_difference, 0);
+  EXPECT_TRUE(v.app.last_error().empty());
+}
+
+}  // namespace
+}  // namespace dynscope::app::viewer

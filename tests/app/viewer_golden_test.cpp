@@ -1,0 +1,71 @@
+// Golden screenshots of the whole viewer UI (960x600, OSMesa, null platform) compared within a
+// small per-pixel tolerance; DYNSCOPE_UPDATE_GOLDEN=1 (tests/app/update_goldens.sh) rewrites them.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "render/image.h"
+#include "render/png_io.h"
+#include "viewer_test_util.h"
+
+namespace dynscope::app::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kTolerance = 8;           // max channel difference of a matching pixel
+constexpr double kMinFraction = 0.995;  // share of pixels that must match
+
+void expect_matches_golden(const render::Image& actual, const std::string& name) {
+  const fs::path golden = fs::path(DYNSCOPE_SOURCE_DIR) / "tests/app/golden" / (name + ".png");
+  const char* update = std::getenv("DYNSCOPE_UPDATE_GOLDEN");
+  if (update && std::string(update) == "1") {
+    render::write_png(golden.string(), actual);
+    std::printf("updated %s\n", golden.c_str());
+    return;
+  }
+  ASSERT_TRUE(fs::exists(golden)) << golden << " is missing; run tests/app/update_goldens.sh";
+  const render::Image expected = render::read_png(golden.string());
+  const render::ImageComparison c = render::compare_images(actual, expected, kTolerance);
+  if (c.fraction_within < kMinFraction) {
+    const fs::path dir = DYNSCOPE_VIEWER_ARTIFACT_DIR;
+    fs::create_directories(dir);
+    const fs::path actual_path = dir / (name + "_actual.png");
+    const fs::path diff_path = dir / (name + "_diff.png");
+    render::write_png(actual_path.string(), actual);
+    render::write_png(diff_path.string(), c.diff);
+    ADD_FAILURE() << name << ": only " << 100.0 * c.fraction_within << "% of pixels within "
+                  << kTolerance << " (max difference " << c.max_difference
+                  << ")\n  golden: " << golden.string() << "\n  actual: " << actual_path.string()
+                  << "\n  diff:   " << diff_path.string();
+  }
+}
+
+// A few frames so ImGui settles its layout (auto-sized columns, opened sections).
+render::Image settle(testing::HeadlessViewer& v) {
+  for (int i = 0; i < 3; ++i) v.app.frame();
+  return v.app.read_pixels();
+}
+
+TEST(ViewerGolden, NeighbourhoodInspector) {
+  testing::HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.set_frame(9);
+  v.app.select_point(17);
+  expect_matches_golden(settle(v), "viewer_neighbourhood");
+}
+
+TEST(ViewerGolden, LevelBrowser) {
+  testing::HeadlessViewer v;
+  v.app.open_scene(testing::collide_scene());
+  v.app.set_frame(9);
+  v.app.set_level(1);
+  v.app.layers().voxels = true;
+  v.app.show_panel(Panel::kLevels);
+  v.app.show_panel(Panel::kObjects);
+  expect_matches_golden(settle(v), "viewer_levels");
+}
+
+}  // namespace
+}  // namespace dynscope::app::viewer
