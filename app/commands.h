@@ -15,6 +15,14 @@ void add_generate_command(CLI::App& app);
 /// `dynscope render SCENE.h5 --out DIR`: headless PNG frames, contact sheet, optional MP4.
 void add_render_command(CLI::App& app);
 
+/// `dynscope train`: train a dynamics model on a generated dataset.
+void add_train_command(CLI::App& app);
+/// `dynscope rollout`: roll a checkpoint out on one scene into an HDF5 rollout file.
+void add_rollout_command(CLI::App& app);
+/// `dynscope eval`: point error and contact accuracy over a dataset split, with a baseline.
+void add_eval_command(CLI::App& app);
+/// `dynscope trace`: record one forward pass of a checkpoint into an HDF5 trace file.
+void add_trace_command(CLI::App& app);
 /// `dynscope view [SCENE.h5]`: the interactive viewer, or a headless UI screenshot.
 void add_view_command(CLI::App& app);
 

@@ -21,6 +21,10 @@ int main(int argc, char** argv) {
   dynscope::app::add_info_command(app);
   dynscope::app::add_generate_command(app);
   dynscope::app::add_render_command(app);
+  dynscope::app::add_train_command(app);
+  dynscope::app::add_rollout_command(app);
+  dynscope::app::add_eval_command(app);
+  dynscope::app::add_trace_command(app);
   dynscope::app::add_view_command(app);
 
   try {

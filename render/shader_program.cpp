@@ -64,6 +64,15 @@ const std::vector<ProgramSources>& renderer_programs() {
   return kPrograms;
 }
 
+const std::vector<ProgramSources>& embedded_programs() {
+  static const std::vector<ProgramSources> kPrograms = [] {
+    std::vector<ProgramSources> all = renderer_programs();
+    all.push_back({"imgui", "imgui.vert", "imgui.frag"});
+    return all;
+  }();
+  return kPrograms;
+}
+
 std::string format_shader_log(const std::string& file, const std::string& log) {
   // Mesa: "0:12(5): error: ...", NVIDIA: "0(12) : error ...", others: "ERROR: 0:12: ...".
   static const std::regex kMesa(R"(^\s*\d+:(\d+)\(\d+\):\s*(.*)$)");

@@ -17,6 +17,8 @@ struct ProgramSources {
 };
 /// points, pick, mesh, lines, boxes and grid.
 const std::vector<ProgramSources>& renderer_programs();
+/// Every program the embedded shaders make: the renderer's plus the UI overlay ("imgui").
+const std::vector<ProgramSources>& embedded_programs();
 
 /// A linked GL program. Owns the GL object; needs its context current for every call.
 class ShaderProgram {

@@ -12,11 +12,11 @@
 namespace dynscope::render {
 namespace {
 
-TEST(ShaderProgram, EveryRendererProgramCompilesAndLinks) {
+TEST(ShaderProgram, EveryEmbeddedProgramCompilesAndLinks) {
   GlContext& context = testing::osmesa(16, 16);
   GlFunctions gl;
   gl.load(context);
-  for (const ProgramSources& p : renderer_programs()) {
+  for (const ProgramSources& p : embedded_programs()) {
     SCOPED_TRACE(p.name);
     ShaderProgram program = ShaderProgram::from_embedded(gl, p.vertex, p.fragment);
     EXPECT_NE(program.id(), 0u);
@@ -25,7 +25,7 @@ TEST(ShaderProgram, EveryRendererProgramCompilesAndLinks) {
 
 TEST(ShaderProgram, EveryEmbeddedShaderIsUsedAndVersioned) {
   std::set<std::string> used;
-  for (const ProgramSources& p : renderer_programs()) {
+  for (const ProgramSources& p : embedded_programs()) {
     used.insert(p.vertex);
     used.insert(p.fragment);
   }

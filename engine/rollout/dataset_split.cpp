@@ -1,0 +1,62 @@
+// Dataset manifest reader (format written by engine/sim/dataset.cpp).
+#include "engine/rollout/dataset_split.h"
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+DatasetSplit read_dataset_split(const std::string& dir, const std::string& split) {
+  if (split != "train" && split != "val" && split != "test") {
+    throw ValueError("split", "unknown split '" + split + "' (train, val or test)");
+  }
+  namespace fs = std::filesystem;
+  const std::string path = (fs::path(dir) / "manifest.json").string();
+  if (!fs::is_directory(dir)) throw IoError(dir, "dataset directory does not exist");
+  std::ifstream in(path);
+  if (!in)
+    throw IoError(path,
+                  "cannot open dataset manifest (is this a `dynscope generate` "
+                  "output directory?)");
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json m;
+  try {
+    m = nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, "manifest", std::string("malformed JSON: ") + e.what());
+  }
+  DatasetSplit out;
+  out.dir = dir;
+  out.split = split;
+  try {
+    out.scenario = m.at("scenario").get<std::string>();
+    std::map<std::string, int> outcome;
+    if (m.contains("files")) {
+      for (const auto& f : m.at("files")) {
+        outcome[f.at("file").get<std::string>()] = f.value("outcome", -1);
+      }
+    }
+    for (const auto& f : m.at("split").at(split)) {
+      DatasetItem item;
+      item.file = f.get<std::string>();
+      item.path = (fs::path(dir) / item.file).string();
+      const auto it = outcome.find(item.file);
+      item.outcome = it == outcome.end() ? -1 : it->second;
+      if (!fs::exists(item.path)) {
+        throw FormatError(path, "split/" + split, "lists " + item.file + ", which does not exist");
+      }
+      out.items.push_back(item);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, "manifest", std::string("missing or malformed field: ") + e.what());
+  }
+  return out;
+}
+
+}  // namespace dynscope

@@ -1,0 +1,29 @@
+// The scene files of one split of a dataset directory written by `dynscope generate`.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace dynscope {
+
+/// One scene of a dataset split.
+struct DatasetItem {
+  std::string path;  ///< Full path of the scene file.
+  std::string file;  ///< File name as listed in the manifest.
+  int outcome = -1;  ///< Manifest label: 1/0 target touched the zone or not; −1 unlabelled.
+};
+
+/// A dataset directory's manifest, reduced to what training and evaluation need.
+struct DatasetSplit {
+  std::string dir;
+  std::string scenario;            ///< Manifest "scenario".
+  std::string split;               ///< "train", "val" or "test".
+  std::vector<DatasetItem> items;  ///< In manifest order.
+};
+
+/// Reads DIR/manifest.json and returns the files of `split`. Throws ValueError("split", ...) for
+/// a split other than train/val/test, IoError if the manifest is missing or unreadable,
+/// FormatError naming the field for a malformed manifest or a listed file that does not exist.
+DatasetSplit read_dataset_split(const std::string& dir, const std::string& split);
+
+}  // namespace dynscope

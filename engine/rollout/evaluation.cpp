@@ -1,0 +1,191 @@
+// Dataset evaluation over model and baseline rollouts.
+#include "engine/rollout/evaluation.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "engine/core/error.h"
+#include "engine/io/scene_file.h"
+
+namespace dynscope {
+
+namespace {
+
+constexpr const char* kContactLabel = "target_contacting_zone";
+
+int scene_label(const Scene& scene, int fallback) {
+  const auto it = scene.labels.find(kContactLabel);
+  if (it == scene.labels.end()) return fallback;
+  for (double v : it->second) {
+    if (v > 0.5) return 1;
+  }
+  return 0;
+}
+
+double min_of(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+}
+
+void add_curve(std::vector<double>& sum, const std::vector<double>& curve, int count) {
+  if (count == 0) {
+    sum = curve;
+    return;
+  }
+  sum.resize(std::min(sum.size(), curve.size()));
+  for (size_t i = 0; i < sum.size(); ++i) sum[i] += curve[i];
+}
+
+void finish(ScenarioSummary& s) {
+  if (s.scenes > 0) {
+    s.model_end_error /= s.scenes;
+    s.baseline_end_error /= s.scenes;
+    for (double& v : s.model_curve) v /= s.scenes;
+    for (double& v : s.baseline_curve) v /= s.scenes;
+  }
+  if (s.labelled > 0) {
+    s.model_accuracy /= s.labelled;
+    s.baseline_accuracy /= s.labelled;
+    s.truth_accuracy /= s.labelled;
+  }
+}
+
+void accumulate(ScenarioSummary& s, const SceneEvaluation& e) {
+  add_curve(s.model_curve, e.model_curve, s.scenes);
+  add_curve(s.baseline_curve, e.baseline_curve, s.scenes);
+  ++s.scenes;
+  s.model_end_error += e.model_curve.back();
+  s.baseline_end_error += e.baseline_curve.empty() ? 0.0 : e.baseline_curve.back();
+  if (e.label >= 0 && e.has_contact) {
+    ++s.labelled;
+    s.model_accuracy += (e.model_contact == (e.label == 1)) ? 1 : 0;
+    s.baseline_accuracy += (e.baseline_contact == (e.label == 1)) ? 1 : 0;
+    s.truth_accuracy += (e.truth_contact == (e.label == 1)) ? 1 : 0;
+  }
+}
+
+}  // namespace
+
+EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
+                           const EvalOptions& options, Progress* progress) {
+  EvalSummary out;
+  out.dir = split.dir;
+  out.split = split.split;
+  out.observed_frames = options.observed_frames;
+  for (const DatasetItem& item : split.items) {
+    try {
+      const Scene scene = read_scene(item.path);
+      const ModelPoints points = build_model_points(scene, options.sampling);
+      out.voxel = points.voxel;
+      out.threshold = options.contact_threshold > 0 ? options.contact_threshold
+                                                    : options.threshold_fraction * points.voxel;
+      RolloutOptions ro;
+      ro.observed_frames = options.observed_frames;
+      const Rollout m = run_rollout(scene, points, model, ro);
+      SceneEvaluation e;
+      e.file = item.file;
+      e.scenario = scene.scenario;
+      e.frames = m.num_frames();
+      e.label = scene_label(scene, item.outcome);
+      e.model_curve = m.point_error;
+      e.has_contact = m.has_contact();
+      if (e.has_contact) {
+        e.truth_contact = contact_predicted(m.contact_distance_truth, out.threshold);
+        e.model_contact = contact_predicted(m.contact_distance_predicted, out.threshold);
+        e.truth_min_distance = min_of(m.contact_distance_truth);
+        e.model_min_distance = min_of(m.contact_distance_predicted);
+      }
+      if (options.baseline) {
+        RolloutOptions bo = ro;
+        bo.floor_clamp = true;
+        const Rollout b = run_rollout(
+            scene, points, constant_velocity_predictor(default_gravity(scene.scenario), scene.dt_s),
+            bo);
+        e.baseline_curve = b.point_error;
+        if (e.has_contact) {
+          e.baseline_contact = contact_predicted(b.contact_distance_predicted, out.threshold);
+          e.baseline_min_distance = min_of(b.contact_distance_predicted);
+        }
+      }
+      accumulate(out.scenarios[e.scenario], e);
+      accumulate(out.scenarios["all"], e);
+      out.scenes.push_back(std::move(e));
+    } catch (const IoError&) {
+      throw;
+    } catch (const Error& e) {
+      throw Error(item.path + ": " + e.what());
+    }
+    if (progress) progress->advance();
+  }
+  for (auto& [name, s] : out.scenarios) finish(s);
+  return out;
+}
+
+std::string eval_to_json(const EvalSummary& s) {
+  using nlohmann::json;
+  json j;
+  j["dir"] = s.dir;
+  j["split"] = s.split;
+  j["observed_frames"] = s.observed_frames;
+  j["sampling_voxel"] = s.voxel;
+  j["contact_threshold"] = s.threshold;
+  j["baseline"] =
+      "constant velocity + gravity (p(t+1) = p(t) + v(t) - g dt^2 z), Kabsch-rigidified, "
+      "floor clamp at z = 0";
+  for (const auto& [name, a] : s.scenarios) {
+    j["scenarios"][name] = {{"scenes", a.scenes},
+                            {"end_error", a.model_end_error},
+                            {"baseline_end_error", a.baseline_end_error},
+                            {"error_curve", a.model_curve},
+                            {"baseline_error_curve", a.baseline_curve},
+                            {"labelled", a.labelled},
+                            {"contact_accuracy", a.model_accuracy},
+                            {"baseline_contact_accuracy", a.baseline_accuracy},
+                            {"truth_contact_accuracy", a.truth_accuracy}};
+  }
+  for (const SceneEvaluation& e : s.scenes) {
+    json se = {{"file", e.file},
+               {"scenario", e.scenario},
+               {"frames", e.frames},
+               {"label", e.label},
+               {"end_error", e.model_curve.back()},
+               {"error_curve", e.model_curve},
+               {"baseline_error_curve", e.baseline_curve}};
+    if (e.has_contact) {
+      se["truth_contact"] = e.truth_contact;
+      se["contact"] = e.model_contact;
+      se["baseline_contact"] = e.baseline_contact;
+      se["truth_min_distance"] = e.truth_min_distance;
+      se["min_distance"] = e.model_min_distance;
+      se["baseline_min_distance"] = e.baseline_min_distance;
+    }
+    j["scenes"].push_back(se);
+  }
+  return j.dump(2) + "\n";
+}
+
+std::string eval_table(const EvalSummary& s) {
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "split %s, %d observed frames, sampling voxel %.4g, contact threshold %.4g\n",
+                s.split.c_str(), s.observed_frames, s.voxel, s.threshold);
+  out += line;
+  std::snprintf(line, sizeof line, "%-10s %6s %12s %12s %8s %9s %9s %9s\n", "scenario", "scenes",
+                "end error", "baseline", "labels", "contact", "baseline", "truth");
+  out += line;
+  for (const auto& [name, a] : s.scenarios) {
+    if (a.labelled > 0) {
+      std::snprintf(line, sizeof line, "%-10s %6d %12.4f %12.4f %8d %8.1f%% %8.1f%% %8.1f%%\n",
+                    name.c_str(), a.scenes, a.model_end_error, a.baseline_end_error, a.labelled,
+                    100 * a.model_accuracy, 100 * a.baseline_accuracy, 100 * a.truth_accuracy);
+    } else {
+      std::snprintf(line, sizeof line, "%-10s %6d %12.4f %12.4f %8s %9s %9s %9s\n", name.c_str(),
+                    a.scenes, a.model_end_error, a.baseline_end_error, "-", "-", "-", "-");
+    }
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace dynscope

@@ -1,0 +1,78 @@
+// Dataset evaluation: Kubric-style end-of-rollout point error and Physion-style contact accuracy,
+// for a model and the constant-velocity-plus-gravity baseline.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/core/progress.h"
+#include "engine/rollout/dataset_split.h"
+#include "engine/rollout/metrics.h"
+#include "engine/rollout/model_points.h"
+#include "engine/rollout/rollout_runner.h"
+
+namespace dynscope {
+
+/// What an evaluation runs.
+struct EvalOptions {
+  int observed_frames = 3;         ///< Ground-truth frames before prediction starts.
+  SamplingOptions sampling;        ///< Model points (input mode must match the model).
+  double contact_threshold = 0.0;  ///< Contact distance (scene units); 0: fraction × voxel.
+  double threshold_fraction = kContactThresholdFraction;  ///< Used when contact_threshold is 0.
+  bool baseline = true;  ///< Also roll out the constant-velocity baseline.
+};
+
+/// Results of one scene.
+struct SceneEvaluation {
+  std::string file;
+  std::string scenario;
+  int frames = 0;
+  int label = -1;  ///< Scene label (any frame of target_contacting_zone), −1 none.
+  std::vector<double> model_curve;  ///< `[T]` mean point error per frame.
+  std::vector<double> baseline_curve;
+  bool has_contact = false;    ///< The scene has a target and a zone.
+  bool truth_contact = false;  ///< Threshold rule applied to the ground-truth points.
+  bool model_contact = false;
+  bool baseline_contact = false;
+  double model_min_distance = 0.0;  ///< Min target–zone distance over all frames.
+  double baseline_min_distance = 0.0;
+  double truth_min_distance = 0.0;
+};
+
+/// Aggregates of one scenario (or of everything, scenario "all").
+struct ScenarioSummary {
+  int scenes = 0;
+  double model_end_error = 0.0;  ///< Mean over scenes of the last frame's point error.
+  double baseline_end_error = 0.0;
+  std::vector<double> model_curve;  ///< Mean per-frame error over scenes (shortest length).
+  std::vector<double> baseline_curve;
+  int labelled = 0;             ///< Scenes with a label and a target and zone.
+  double model_accuracy = 0.0;  ///< Fraction of labelled scenes predicted right.
+  double baseline_accuracy = 0.0;
+  double truth_accuracy = 0.0;  ///< The threshold rule on ground truth (its ceiling).
+};
+
+/// The whole evaluation.
+struct EvalSummary {
+  std::string dir, split;
+  int observed_frames = 0;
+  double voxel = 0.0;      ///< Sampling voxel of the model points.
+  double threshold = 0.0;  ///< Contact threshold used (scene units).
+  std::vector<SceneEvaluation> scenes;
+  std::map<std::string, ScenarioSummary> scenarios;  ///< Per scenario, plus "all".
+};
+
+/// Rolls out `model` (and the baseline) on every scene of `split`, reporting each scene to
+/// `progress`. Throws like read_scene, build_model_points and run_rollout (the message names the
+/// scene file).
+EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
+                           const EvalOptions& options, Progress* progress = nullptr);
+
+/// The summary as indented JSON (every number, per scene and per scenario).
+std::string eval_to_json(const EvalSummary& summary);
+
+/// A plain-text table of the per-scenario summary.
+std::string eval_table(const EvalSummary& summary);
+
+}  // namespace dynscope

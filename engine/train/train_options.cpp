@@ -1,0 +1,150 @@
+// TrainOptions JSON round trip and resolution against the dataset scale.
+#include "engine/train/train_options.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+
+std::string TrainOptions::to_json() const {
+  nlohmann::json j;
+  j["data"] = data_dir;
+  j["out"] = out;
+  j["scale"] = scale;
+  j["model_config"] = nlohmann::json::parse(model.to_json());
+  j["set_voxel"] = set_voxel;
+  j["set_radius"] = set_radius;
+  j["faces"] = faces;
+  j["sampling"] = {{"voxel", sampling.voxel},
+                   {"oversample", sampling.oversample},
+                   {"seed", sampling.seed},
+                   {"input", to_string(sampling.input)}};
+  j["epochs"] = epochs;
+  j["samples_per_scene"] = samples_per_scene;
+  j["batch"] = batch;
+  j["lr"] = lr;
+  j["noise_std"] = noise_std;
+  j["huber_delta"] = huber_delta;
+  j["max_steps"] = max_steps;
+  j["checkpoint_every"] = checkpoint_every;
+  j["val_scenes"] = val_scenes;
+  j["val_frames"] = val_frames;
+  j["threads"] = threads;
+  j["seed"] = seed;
+  j["log"] = log_csv;
+  return j.dump(2) + "\n";
+}
+
+TrainOptions TrainOptions::from_json(const std::string& text, const std::string& source,
+                                     const TrainOptions& base) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(source, "recipe", std::string("malformed JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw FormatError(source, "recipe", "expected a JSON object");
+  TrainOptions o = base;
+  std::string field;
+  try {
+    auto get = [&](const char* name, auto& value) {
+      field = name;
+      if (j.contains(name)) value = j.at(name).get<std::decay_t<decltype(value)>>();
+    };
+    get("data", o.data_dir);
+    get("out", o.out);
+    get("scale", o.scale);
+    field = "model_config";
+    if (j.contains("model_config")) {
+      o.model = ModelConfig::from_json(j.at("model_config").dump(), source);
+    }
+    get("set_voxel", o.set_voxel);
+    get("set_radius", o.set_radius);
+    get("faces", o.faces);
+    field = "sampling";
+    if (j.contains("sampling")) {
+      const auto& s = j.at("sampling");
+      o.sampling.voxel = s.value("voxel", o.sampling.voxel);
+      o.sampling.oversample = s.value("oversample", o.sampling.oversample);
+      o.sampling.seed = s.value("seed", o.sampling.seed);
+      if (s.contains("input"))
+        o.sampling.input = parse_input_mode(s.at("input").get<std::string>());
+    }
+    get("epochs", o.epochs);
+    get("samples_per_scene", o.samples_per_scene);
+    get("batch", o.batch);
+    get("lr", o.lr);
+    get("noise_std", o.noise_std);
+    get("huber_delta", o.huber_delta);
+    get("max_steps", o.max_steps);
+    get("checkpoint_every", o.checkpoint_every);
+    get("val_scenes", o.val_scenes);
+    get("val_frames", o.val_frames);
+    get("threads", o.threads);
+    get("seed", o.seed);
+    get("log", o.log_csv);
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(source, field, std::string("wrong type: ") + e.what());
+  } catch (const ValueError& e) {
+    throw FormatError(source, field, e.what());
+  }
+  return o;
+}
+
+TrainOptions TrainOptions::from_json(const std::string& text, const std::string& source) {
+  return from_json(text, source, TrainOptions());
+}
+
+void TrainOptions::resolve(const std::string& scenario) {
+  if (scale.empty()) scale = default_scale_preset(scenario);
+  const ModelConfig preset = ModelConfig::preset(scale);
+  const bool kubric = scale == "kubric";
+  if (!set_voxel) model.voxel = preset.voxel;
+  if (!set_radius) model.radius = preset.radius;
+  if (epochs == 0) epochs = kubric ? 15 : 30;
+  if (samples_per_scene == 0) samples_per_scene = kubric ? 2 : 8;
+  if (lr == 0) lr = kubric ? 5e-3 : 1e-3;
+  // The points model can run on mesh vertices: that is mesh input without face reasoning.
+  // A resolved recipe of a faces-off mesh run has model input "points" over mesh sampling.
+  sampling.input = model.input == InputMode::kMesh || (!faces && sampling.input == InputMode::kMesh)
+                       ? InputMode::kMesh
+                       : InputMode::kPoints;
+  if (model.input == InputMode::kMesh && !faces) model.input = InputMode::kPoints;
+  if (sampling.voxel == 0) sampling.voxel = default_sampling_voxel(scenario);
+  model.validate();
+  auto positive = [](const char* name, double v) {
+    if (!(v > 0)) throw ValueError(name, "must be positive, got " + std::to_string(v));
+  };
+  positive("epochs", epochs);
+  positive("samples-per-scene", samples_per_scene);
+  positive("batch", batch);
+  positive("lr", lr);
+  positive("huber-delta", huber_delta);
+  positive("checkpoint-every", checkpoint_every);
+  positive("val-frames", val_frames);
+  if (noise_std < 0) throw ValueError("noise-std", "must be >= 0");
+  if (max_steps < 0) throw ValueError("max-steps", "must be >= 0");
+  if (val_scenes < 0) throw ValueError("val-scenes", "must be >= 0");
+  if (threads < 0) throw ValueError("threads", "must be >= 0");
+  if (out.empty()) throw ValueError("out", "no checkpoint path given");
+}
+
+std::string train_state_path(const std::string& checkpoint) { return checkpoint + ".state"; }
+std::string recipe_path(const std::string& checkpoint) { return checkpoint + ".recipe.json"; }
+
+SamplingOptions checkpoint_sampling(const std::string& checkpoint, const ModelConfig& config) {
+  const std::string path = recipe_path(checkpoint);
+  SamplingOptions s;
+  s.input = config.input;
+  if (!std::filesystem::exists(path)) return s;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return TrainOptions::from_json(text.str(), path).sampling;
+}
+
+}  // namespace dynscope

@@ -1,0 +1,62 @@
+// Training options ("recipe"): plain data with a JSON round trip, resolved against the dataset.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "engine/model/model_config.h"
+#include "engine/rollout/model_points.h"
+
+namespace dynscope {
+
+/// Everything `dynscope train` needs. Zero-valued "auto" fields are filled by resolve() from the
+/// dataset's scale (paper supplement: Kubric lr 5e-3, 15 epochs, N = 2; Physion lr 1e-3,
+/// 30 epochs, N = 8).
+struct TrainOptions {
+  std::string data_dir;
+  std::string out;            ///< Checkpoint path; CKPT.state and CKPT.recipe.json sit next to it.
+  std::string scale;          ///< "kubric" | "physion" | "" (from the scenario: movi-* → kubric).
+  ModelConfig model;          ///< Architecture; voxel and radius come from the scale preset unless
+                              ///< set_voxel/set_radius.
+  bool set_voxel = false;     ///< model.voxel was given explicitly.
+  bool set_radius = false;    ///< model.radius was given explicitly.
+  bool faces = true;          ///< Mesh input: interaction-point reasoning; off runs the point
+                              ///< model on the simplified mesh vertices.
+  SamplingOptions sampling;   ///< Model points (input follows `model.input`).
+  int epochs = 0;             ///< 0: 15 (kubric) / 30 (physion).
+  int samples_per_scene = 0;  ///< N draws per training scene per epoch; 0: 2 / 8.
+  int batch = 1;              ///< Scenes (one random frame each) per optimiser step.
+  double lr = 0.0;            ///< Adam learning rate; 0: 5e-3 / 1e-3.
+  double noise_std = 3e-4;    ///< Std of the random-walk noise on input velocities (units/frame).
+  double huber_delta = 1.0;   ///< Huber transition point in target-std units.
+  int64_t max_steps = 0;      ///< Stop after this many steps in total (0: all epochs).
+  int checkpoint_every = 200;  ///< Write checkpoint and training state every N steps.
+  int val_scenes = 4;          ///< Validation scenes used for the loss and the short rollout.
+  int val_frames = 8;          ///< Frames of the validation rollout (observed ones included).
+  int threads = 0;             ///< torch::set_num_threads (0: LibTorch's default).
+  uint64_t seed = 0;           ///< Seeds initialisation, scene order, frames and noise.
+  std::string log_csv;         ///< Per-step CSV log ("" = none).
+  bool resume = false;         ///< Continue from `out` and its .state file.
+
+  /// JSON object with every field (the recipe file format).
+  std::string to_json() const;
+  /// Applies the fields present in `text` over `base` (missing fields keep base's values). Throws
+  /// FormatError(source, field, ...) on malformed JSON, wrong types or unknown names.
+  static TrainOptions from_json(const std::string& text, const std::string& source,
+                                const TrainOptions& base);
+  /// from_json over default options.
+  static TrainOptions from_json(const std::string& text, const std::string& source);
+  /// Fills the automatic fields for `scenario` and validates. Throws ValueError naming the field.
+  void resolve(const std::string& scenario);
+};
+
+/// CKPT + ".state": optimiser state and step for --resume.
+std::string train_state_path(const std::string& checkpoint);
+/// CKPT + ".recipe.json": the resolved options, read back by rollout, eval and trace.
+std::string recipe_path(const std::string& checkpoint);
+
+/// Sampling a checkpoint was trained with: its recipe file when present, else the defaults for
+/// the scenario with `input` from the model config. Throws FormatError for a malformed recipe.
+SamplingOptions checkpoint_sampling(const std::string& checkpoint, const ModelConfig& config);
+
+}  // namespace dynscope

@@ -1,0 +1,339 @@
+// Training loop (LibTorch inside).
+#include "engine/train/trainer.h"
+
+#include <c10/util/Exception.h>
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <numeric>
+
+#include "engine/core/error.h"
+#include "engine/core/log.h"
+#include "engine/core/progress.h"
+#include "engine/core/rng.h"
+#include "engine/io/scene_file.h"
+#include "engine/model/checkpoint.h"
+#include "engine/rollout/dataset_split.h"
+#include "engine/rollout/model_predictor.h"
+#include "engine/rollout/rollout_runner.h"
+
+namespace dynscope {
+
+namespace {
+
+// Seed streams: one per purpose so that none shifts another.
+constexpr uint64_t kOrderStream = 0x6f72646572ULL;
+constexpr uint64_t kStepStream = 0x73746570ULL;
+// At most this many frames per scene feed the normalisation statistics.
+constexpr int kStatsFramesPerScene = 16;
+
+// One scene with its model points and every frame's positions.
+struct SceneData {
+  std::string path;
+  Scene scene;
+  ModelPoints points;
+  std::vector<Points> frames;
+};
+
+SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
+  SceneData d;
+  d.path = path;
+  d.scene = read_scene(path);
+  if (d.scene.num_frames() < 4) {
+    throw ValueError(
+        path, "has " + std::to_string(d.scene.num_frames()) + " frames; training needs at least 4");
+  }
+  d.points = build_model_points(d.scene, sampling);
+  for (int f = 0; f < d.scene.num_frames(); ++f) d.frames.push_back(d.points.positions(d.scene, f));
+  return d;
+}
+
+// One training example: noisy state at t and the true p(t+1).
+struct Example {
+  PointState state;
+  Points next;
+};
+
+Example make_example(const SceneData& d, int t, double noise_std, Rng* rng) {
+  Example e;
+  const Points& p2 = d.frames[static_cast<size_t>(t - 2)];
+  const Points& p1 = d.frames[static_cast<size_t>(t - 1)];
+  const Points& p0 = d.frames[static_cast<size_t>(t)];
+  Points v_prev = p1 - p2;
+  Points v = p0 - p1;
+  Points pos = p0;
+  if (rng && noise_std > 0) {
+    // GNS random walk: the older velocity gets one increment, the newer one two, each with
+    // variance σ²/2, so the noise on v(t) has std σ; positions follow the noisy velocities.
+    const double step_std = noise_std / std::sqrt(2.0);
+    Points n1(v.rows(), 3), n2(v.rows(), 3);
+    for (Eigen::Index i = 0; i < n1.size(); ++i) n1.data()[i] = rng->normal(0.0, step_std);
+    for (Eigen::Index i = 0; i < n2.size(); ++i) n2.data()[i] = rng->normal(0.0, step_std);
+    n2 += n1;
+    v_prev += n1;
+    v += n2;
+    pos = p2 + v_prev + v;
+  }
+  e.state.position = pos;
+  e.state.velocity = v;
+  e.state.prev_velocity = v_prev;
+  e.state.object_ids = d.points.cloud.object_id;
+  e.state.faces = d.points.faces;
+  e.next = d.frames[static_cast<size_t>(t + 1)];
+  return e;
+}
+
+// Sum over points and components of the Huber loss in target-std units, and the point count.
+torch::Tensor example_loss(DynamicsModel& model, const Example& e, double delta) {
+  const ModelInput input = make_model_input(e.state, model->build_hierarchy(e.state));
+  const torch::Tensor predicted = model->predict_positions(input);
+  const torch::Tensor truth = points_to_tensor(e.next);
+  // p̂ − p equals the target error; dividing by the target std makes delta scale-free.
+  const NormStats stats = model->stats();
+  const torch::Tensor std = torch::tensor(
+      {stats.target_std.x(), stats.target_std.y(), stats.target_std.z()}, torch::kDouble);
+  const torch::Tensor err = ((predicted - truth) / std).to(torch::kFloat);
+  return torch::nn::functional::huber_loss(
+      err, torch::zeros_like(err),
+      torch::nn::functional::HuberLossFuncOptions().reduction(torch::kSum).delta(delta));
+}
+
+NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target) {
+  NormStatsAccumulator acc(target);
+  for (const SceneData& d : scenes) {
+    const int frames = static_cast<int>(d.frames.size());
+    const int stride = std::max(1, (frames - 2) / kStatsFramesPerScene);
+    for (int t = 1; t + 1 < frames; t += stride) {
+      acc.add(d.frames[static_cast<size_t>(t - 1)], d.frames[static_cast<size_t>(t)],
+              d.frames[static_cast<size_t>(t + 1)]);
+    }
+  }
+  return acc.finish(1e-6);
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  const std::string temp = path + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << text;
+    if (!out) throw IoError(path, "cannot write");
+  }
+  std::filesystem::rename(temp, path);
+}
+
+void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t step,
+                const std::string& config_json) {
+  const std::string temp = path + ".tmp";
+  torch::serialize::OutputArchive archive;
+  optimizer.save(archive);
+  archive.write("step", c10::IValue(step));
+  archive.write("config", c10::IValue(config_json));
+  archive.save_to(temp);
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) throw IoError(path, "cannot write training state: " + ec.message());
+}
+
+int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
+                   const std::string& config_json) {
+  if (!std::filesystem::exists(path)) {
+    throw IoError(path,
+                  "training state missing; cannot --resume (was the run started with "
+                  "this --out?)");
+  }
+  torch::serialize::InputArchive archive;
+  archive.load_from(path);
+  c10::IValue step, config;
+  if (!archive.try_read("step", step) || !archive.try_read("config", config)) {
+    throw FormatError(path, "step", "not a dynscope training state");
+  }
+  if (config.toStringRef() != config_json) {
+    throw FormatError(path, "config",
+                      "the state was saved for another architecture; start without --resume "
+                      "or use the original options");
+  }
+  optimizer.load(archive);
+  return step.toInt();
+}
+
+struct CsvLog {
+  std::ofstream out;
+  CsvLog(const std::string& path, bool append) {
+    if (path.empty()) return;
+    const bool exists = std::filesystem::exists(path);
+    out.open(path, append ? std::ios::app : std::ios::trunc);
+    if (!out) throw IoError(path, "cannot open log for writing");
+    if (!append || !exists) out << "step,epoch,loss,val_loss,val_rollout_error,seconds\n";
+  }
+  void row(int64_t step, int epoch, double loss, double val_loss, double val_err, double s) {
+    if (!out.is_open()) return;
+    char line[200];
+    std::snprintf(line, sizeof line, "%lld,%d,%.8g,%s,%s,%.3f\n", static_cast<long long>(step),
+                  epoch, loss, std::isnan(val_loss) ? "" : std::to_string(val_loss).c_str(),
+                  std::isnan(val_err) ? "" : std::to_string(val_err).c_str(), s);
+    out << line;
+    out.flush();
+  }
+};
+
+TrainResult run(TrainOptions o, bool show_progress) {
+  const DatasetSplit train_split = read_dataset_split(o.data_dir, "train");
+  const DatasetSplit val_split = read_dataset_split(o.data_dir, "val");
+  if (train_split.items.empty()) {
+    throw ValueError("data", o.data_dir + " has no training scenes");
+  }
+  o.resolve(train_split.scenario);
+  set_torch_threads(o.threads);
+
+  std::vector<SceneData> train, val;
+  for (const DatasetItem& item : train_split.items)
+    train.push_back(load_scene(item.path, o.sampling));
+  for (size_t i = 0; i < val_split.items.size() && static_cast<int>(i) < o.val_scenes; ++i) {
+    val.push_back(load_scene(val_split.items[i].path, o.sampling));
+  }
+
+  torch::manual_seed(o.seed);
+  DynamicsModel model(o.model);
+  const std::string config_json = model->config().to_json();
+  torch::optim::Adam optimizer(model->parameters(), torch::optim::AdamOptions(o.lr));
+  int64_t step = 0;
+  if (o.resume) {
+    load_checkpoint_weights(o.out, model);
+    step = load_state(train_state_path(o.out), optimizer, config_json);
+  } else {
+    model->set_stats(compute_stats(train, o.model.target));
+  }
+
+  const auto n_train = static_cast<int64_t>(train.size());
+  const int64_t draws = n_train * o.samples_per_scene;
+  const int64_t steps_per_epoch = (draws + o.batch - 1) / o.batch;
+  int64_t total = steps_per_epoch * o.epochs;
+  if (o.max_steps > 0) total = std::min(total, o.max_steps);
+
+  TrainResult result;
+  result.start_step = step;
+  result.steps_per_epoch = steps_per_epoch;
+  CsvLog log(o.log_csv, o.resume);
+  write_text_atomically(recipe_path(o.out), o.to_json());
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<Progress> progress;
+  if (show_progress) progress = std::make_unique<Progress>("train", total - step);
+  auto seconds = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+
+  std::vector<int64_t> order;
+  int64_t order_epoch = -1;
+  double epoch_loss = 0.0;
+  int64_t epoch_steps = 0;
+  auto save = [&] {
+    save_checkpoint(o.out, model);
+    save_state(train_state_path(o.out), optimizer, step, config_json);
+  };
+
+  while (step < total) {
+    const int64_t epoch = step / steps_per_epoch;
+    if (epoch != order_epoch) {
+      order.resize(static_cast<size_t>(draws));
+      for (int64_t i = 0; i < draws; ++i) order[static_cast<size_t>(i)] = i % n_train;
+      Rng shuffle(derive_seed(o.seed ^ kOrderStream, static_cast<uint64_t>(epoch)));
+      for (int64_t i = draws - 1; i > 0; --i) {
+        std::swap(order[static_cast<size_t>(i)],
+                  order[static_cast<size_t>(shuffle.uniform_int(0, i))]);
+      }
+      order_epoch = epoch;
+    }
+    Rng rng(derive_seed(o.seed ^ kStepStream, static_cast<uint64_t>(step)));
+    const int64_t first = (step % steps_per_epoch) * o.batch;
+    std::vector<Example> batch;
+    for (int64_t b = first; b < std::min(first + o.batch, draws); ++b) {
+      const SceneData& d = train[static_cast<size_t>(order[static_cast<size_t>(b)])];
+      const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
+      batch.push_back(make_example(d, t, o.noise_std, &rng));
+    }
+    int64_t points = 0;
+    for (const Example& e : batch) points += e.state.size();
+    model->train();
+    optimizer.zero_grad();
+    torch::Tensor loss = torch::zeros({}, torch::kFloat);
+    for (const Example& e : batch) loss = loss + example_loss(model, e, o.huber_delta);
+    loss = loss / static_cast<double>(points * 3);
+    loss.backward();
+    optimizer.step();
+    ++step;
+    const double value = loss.item<double>();
+    if (!std::isfinite(value)) {
+      throw Error("training diverged at step " + std::to_string(step) + " (loss " +
+                  std::to_string(value) + "); lower --lr");
+    }
+    result.last_loss = value;
+    epoch_loss += value;
+    ++epoch_steps;
+    double val_loss = std::numeric_limits<double>::quiet_NaN();
+    double val_err = std::numeric_limits<double>::quiet_NaN();
+    if (step % steps_per_epoch == 0 || step == total) {
+      EpochReport rep;
+      rep.epoch = static_cast<int>((step - 1) / steps_per_epoch);
+      rep.step = step;
+      rep.train_loss = epoch_loss / static_cast<double>(epoch_steps);
+      rep.val_loss = val_loss;
+      rep.val_rollout_error = val_err;
+      if (!val.empty()) {
+        model->eval();
+        torch::NoGradGuard no_grad;
+        double sum = 0.0, err = 0.0;
+        int64_t n = 0;
+        StepPredictor predict = [&model](const PointState& s) { return model->predict_next(s); };
+        for (const SceneData& d : val) {
+          const int t = static_cast<int>(d.frames.size()) / 2;
+          const Example e = make_example(
+              d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), 0.0, nullptr);
+          sum += example_loss(model, e, o.huber_delta).item<double>();
+          n += e.state.size() * 3;
+          RolloutOptions ro;
+          ro.observed_frames = 3;
+          ro.frames = std::min(d.scene.num_frames(), std::max(o.val_frames, 4));
+          err += run_rollout(d.scene, d.points, predict, ro).point_error.back();
+        }
+        val_loss = rep.val_loss = sum / static_cast<double>(n);
+        val_err = rep.val_rollout_error = err / static_cast<double>(val.size());
+      }
+      result.epochs.push_back(rep);
+      log_info("epoch ", rep.epoch + 1, " step ", step, ": train loss ", rep.train_loss,
+               ", val loss ", rep.val_loss, ", val rollout error ", rep.val_rollout_error);
+      epoch_loss = 0.0;
+      epoch_steps = 0;
+    }
+    log.row(step, static_cast<int>((step - 1) / steps_per_epoch), value, val_loss, val_err,
+            seconds());
+    if (progress) {
+      char status[96];
+      std::snprintf(status, sizeof status, "loss %.4g", value);
+      progress->set_status(status);
+      progress->advance();
+    }
+    if (step % o.checkpoint_every == 0 || step == total) save();
+  }
+  if (result.start_step == step) save();
+  if (progress) progress->finish();
+  result.steps = step;
+  return result;
+}
+
+}  // namespace
+
+TrainResult train_model(TrainOptions options, bool show_progress) {
+  try {
+    return run(std::move(options), show_progress);
+  } catch (const c10::Error& e) {
+    throw Error(std::string("training failed in LibTorch: ") + e.what_without_backtrace());
+  }
+}
+
+}  // namespace dynscope

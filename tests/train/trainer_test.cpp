@@ -1,0 +1,128 @@
+// Training: recipes round-trip, a resumed run equals an uninterrupted one, clear errors.
+#include "engine/train/trainer.h"
+
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "engine/core/error.h"
+#include "engine/model/checkpoint.h"
+#include "engine/sim/dataset.h"
+
+namespace dynscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A tiny drop dataset shared by the tests of this file (10 scenes: 8 train, 1 val, 1 test).
+const std::string& dataset_dir() {
+  static const std::string dir = [] {
+    const fs::path d =
+        fs::temp_directory_path() / ("dynscope_train_test_data_" + std::to_string(getpid()));
+    fs::remove_all(d);
+    DatasetOptions o;
+    o.scenario = "drop";
+    o.count = 10;
+    o.seed = 5;
+    o.out_dir = d.string();
+    generate_dataset(o);
+    return d.string();
+  }();
+  return dir;
+}
+
+TrainOptions tiny_options(const std::string& out) {
+  TrainOptions o;
+  o.data_dir = dataset_dir();
+  o.out = out;
+  o.model.width = 8;
+  o.model.levels = 2;
+  o.model.bottleneck_blocks = 1;
+  o.model.k = 6;
+  o.model.k_relational = 6;
+  o.model.c_mid = 4;
+  o.model.pos_channels = 4;
+  o.sampling.voxel = 0.1;
+  o.val_scenes = 1;
+  o.val_frames = 5;
+  o.threads = 1;
+  o.seed = 11;
+  o.checkpoint_every = 1000;
+  return o;
+}
+
+void expect_same_weights(const std::string& a, const std::string& b) {
+  DynamicsModel ma = load_checkpoint(a);
+  DynamicsModel mb = load_checkpoint(b);
+  const auto pa = ma->named_parameters();
+  const auto pb = mb->named_parameters();
+  ASSERT_EQ(pa.size(), pb.size());
+  for (const auto& item : pa) {
+    EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
+  }
+}
+
+TEST(TrainerTest, ResumedRunEqualsUninterruptedRun) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_resume_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  TrainOptions straight = tiny_options((dir / "straight.pt").string());
+  straight.max_steps = 4;
+  const TrainResult r4 = train_model(straight);
+  EXPECT_EQ(r4.steps, 4);
+
+  TrainOptions first = tiny_options((dir / "resumed.pt").string());
+  first.max_steps = 2;
+  EXPECT_EQ(train_model(first).steps, 2);
+  TrainOptions second = first;
+  second.max_steps = 4;
+  second.resume = true;
+  const TrainResult r = train_model(second);
+  EXPECT_EQ(r.start_step, 2);
+  EXPECT_EQ(r.steps, 4);
+  expect_same_weights(straight.out, second.out);
+  EXPECT_TRUE(fs::exists(recipe_path(second.out)));
+}
+
+TEST(TrainerTest, ResumeWithAnotherArchitectureIsAClearError) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_mismatch_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  TrainOptions o = tiny_options((dir / "m.pt").string());
+  o.max_steps = 1;
+  train_model(o);
+  o.model.width = 12;
+  o.resume = true;
+  o.max_steps = 2;
+  EXPECT_THROW(train_model(o), Error);
+}
+
+TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
+  TrainOptions o = tiny_options("x.pt");
+  o.model.kind = ModelKind::kGnn;
+  o.noise_std = 0.002;
+  const TrainOptions back = TrainOptions::from_json(o.to_json(), "recipe.json");
+  EXPECT_EQ(back.to_json(), o.to_json());
+  TrainOptions k = back;
+  k.resolve("movi-a");
+  EXPECT_EQ(k.scale, "kubric");
+  EXPECT_DOUBLE_EQ(k.lr, 5e-3);
+  EXPECT_EQ(k.epochs, 15);
+  EXPECT_EQ(k.samples_per_scene, 2);
+  EXPECT_DOUBLE_EQ(k.model.voxel, 0.3);
+  TrainOptions p = back;
+  p.resolve("drop");
+  EXPECT_DOUBLE_EQ(p.lr, 1e-3);
+  EXPECT_EQ(p.samples_per_scene, 8);
+  try {
+    TrainOptions::from_json(R"({"epochs":"many"})", "r.json");
+    FAIL();
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.field(), "epochs");
+  }
+}
+
+}  // namespace
+}  // namespace dynscope
