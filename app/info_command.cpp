@@ -1,6 +1,7 @@
 // `dynscope info FILE`: describe a scene file or a mesh (objects, frames, bounds, point counts).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -9,7 +10,10 @@
 #include "engine/core/error.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/io/mesh_import.h"
+#include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/trace_file.h"
+#include "engine/model/checkpoint_info.h"
 
 namespace dynscope::app {
 namespace {
@@ -99,9 +103,10 @@ void print_scene(const std::string& path, const Scene& scene, const InfoOptions&
                 o.mass, o.friction, o.restitution, box.c_str(),
                 static_cast<long long>(cloud.count_of(idx)));
   }
-  std::printf("  points     %lld after surface sampling (%.1f samples per voxel area) and grid "
-              "downsampling at voxel %.4g\n",
-              static_cast<long long>(cloud.size()), opt.oversample, voxel);
+  std::printf(
+      "  points     %lld after surface sampling (%.1f samples per voxel area) and grid "
+      "downsampling at voxel %.4g\n",
+      static_cast<long long>(cloud.size()), opt.oversample, voxel);
   for (const auto& [name, values] : scene.labels) {
     int positive = 0, first = -1;
     for (size_t f = 0; f < values.size(); ++f) {
@@ -133,10 +138,14 @@ void print_mesh(const std::string& path, const Mesh& mesh, const InfoOptions& op
   pc_opt.seed = opt.seed;
   const auto points = build_point_cloud(scene, pc_opt).size();
   if (opt.json) {
-    nlohmann::json j = {{"file", path},         {"kind", "mesh"},
-                        {"vertices", mesh.num_vertices()}, {"faces", mesh.num_faces()},
-                        {"area", mesh.area()},  {"bounds", aabb_json(box)},
-                        {"voxel", voxel},       {"points", points}};
+    nlohmann::json j = {{"file", path},
+                        {"kind", "mesh"},
+                        {"vertices", mesh.num_vertices()},
+                        {"faces", mesh.num_faces()},
+                        {"area", mesh.area()},
+                        {"bounds", aabb_json(box)},
+                        {"voxel", voxel},
+                        {"points", points}};
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -144,19 +153,131 @@ void print_mesh(const std::string& path, const Mesh& mesh, const InfoOptions& op
   std::printf("  vertices   %ld\n  faces      %ld\n", static_cast<long>(mesh.num_vertices()),
               static_cast<long>(mesh.num_faces()));
   std::printf("  area       %.6g\n  bounds     %s\n", mesh.area(), format_aabb(box).c_str());
-  std::printf("  points     %lld after surface sampling (%.1f samples per voxel area) and grid "
-              "downsampling at voxel %.4g\n",
-              static_cast<long long>(points), opt.oversample, voxel);
+  std::printf(
+      "  points     %lld after surface sampling (%.1f samples per voxel area) and grid "
+      "downsampling at voxel %.4g\n",
+      static_cast<long long>(points), opt.oversample, voxel);
+}
+
+void print_rollout(const std::string& path, const Rollout& r, const InfoOptions& opt) {
+  const int frames = r.num_frames();
+  const double end_error = frames > 0 ? r.point_error.back() : 0.0;
+  if (opt.json) {
+    nlohmann::json j = {{"file", path},
+                        {"kind", "rollout"},
+                        {"scene", r.scene_path},
+                        {"checkpoint", r.checkpoint_path},
+                        {"scenario", r.scenario},
+                        {"dt_s", r.dt_s},
+                        {"num_frames", frames},
+                        {"observed_frames", r.observed_frames},
+                        {"num_points", r.num_points()},
+                        {"num_objects", r.num_objects()},
+                        {"sampling_voxel", r.sampling_voxel},
+                        {"point_error", r.point_error},
+                        {"end_point_error", end_error}};
+    if (r.has_contact()) {
+      j["contact_distance_truth"] = r.contact_distance_truth;
+      j["contact_distance_predicted"] = r.contact_distance_predicted;
+    }
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("%s: rollout\n", path.c_str());
+  std::printf("  scene      %s (%s)\n", r.scene_path.c_str(), r.scenario.c_str());
+  std::printf("  checkpoint %s\n", r.checkpoint_path.empty() ? "-" : r.checkpoint_path.c_str());
+  std::printf("  frames     %d (%d observed), dt %.5f s\n", frames, r.observed_frames, r.dt_s);
+  std::printf("  points     %ld on %d objects (sampling voxel %.4g)\n",
+              static_cast<long>(r.num_points()), r.num_objects(), r.sampling_voxel);
+  std::printf("  error      mean point distance %.4g at the last frame\n", end_error);
+  if (r.has_contact()) {
+    double truth = r.contact_distance_truth.front(), pred = r.contact_distance_predicted.front();
+    for (size_t f = 0; f < r.contact_distance_truth.size(); ++f) {
+      truth = std::min(truth, r.contact_distance_truth[f]);
+      pred = std::min(pred, r.contact_distance_predicted[f]);
+    }
+    std::printf("  contact    min target-zone distance: truth %.4g, prediction %.4g\n", truth,
+                pred);
+  }
+}
+
+void print_trace(const std::string& path, const ModelTrace& t, const InfoOptions& opt) {
+  if (opt.json) {
+    nlohmann::json j = {{"file", path},
+                        {"kind", "trace"},
+                        {"scene", t.scene_path},
+                        {"checkpoint", t.checkpoint_path},
+                        {"frame", t.frame},
+                        {"mesh", t.has_mesh},
+                        {"feature_records", t.features.size()},
+                        {"filter_records", t.queries.size()}};
+    for (const TraceLevel& level : t.levels) {
+      nlohmann::json lists = nlohmann::json::array();
+      for (const TraceList& l : level.lists) lists.push_back(l.name);
+      j["levels"].push_back({{"points", level.points.rows()},
+                             {"voxel", level.voxel},
+                             {"radius", level.radius},
+                             {"lists", lists}});
+    }
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("%s: trace\n", path.c_str());
+  std::printf("  scene      %s, frame %d\n", t.scene_path.c_str(), t.frame);
+  std::printf("  checkpoint %s\n", t.checkpoint_path.c_str());
+  for (size_t l = 0; l < t.levels.size(); ++l) {
+    const TraceLevel& level = t.levels[l];
+    std::string lists;
+    for (const TraceList& list : level.lists) lists += (lists.empty() ? "" : ", ") + list.name;
+    std::printf("  level %zu    %6ld points, voxel %.4g, radius %.4g, lists: %s\n", l,
+                static_cast<long>(level.points.rows()), level.voxel, level.radius, lists.c_str());
+  }
+  std::printf("  records    %zu feature-norm, %zu filter-weight%s\n", t.features.size(),
+              t.queries.size(), t.has_mesh ? ", mesh interaction points" : "");
+}
+
+void print_checkpoint(const std::string& path, const CheckpointInfo& c, const InfoOptions& opt) {
+  if (opt.json) {
+    nlohmann::json j = {{"file", path},
+                        {"kind", "checkpoint"},
+                        {"format_version", c.format_version},
+                        {"parameters", c.parameter_count},
+                        {"config", nlohmann::json::parse(c.config_json)}};
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("%s: checkpoint (format %lld)\n", path.c_str(),
+              static_cast<long long>(c.format_version));
+  std::printf("  model      %s, target %s, input %s\n", to_string(c.config.kind).c_str(),
+              to_string(c.config.target).c_str(), to_string(c.config.input).c_str());
+  std::printf("  size       width %d, %d levels, %lld parameters\n", c.config.width,
+              c.config.levels, static_cast<long long>(c.parameter_count));
+  std::printf("  config     %s\n", c.config_json.c_str());
+}
+
+bool starts_with_zip_signature(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, 4);
+  return in.gcount() == 4 && magic[0] == 'P' && magic[1] == 'K' && magic[2] == 3 && magic[3] == 4;
 }
 
 void run_info(const InfoOptions& opt) {
   require_readable_file(opt.file);
-  if (is_hdf5_file(opt.file)) {
+  if (is_rollout_file(opt.file)) {
+    print_rollout(opt.file, read_rollout(opt.file), opt);
+  } else if (is_trace_file(opt.file)) {
+    print_trace(opt.file, read_trace(opt.file), opt);
+  } else if (is_hdf5_file(opt.file)) {
     print_scene(opt.file, read_scene(opt.file), opt);
   } else if (is_mesh_file(opt.file)) {
     print_mesh(opt.file, import_mesh(opt.file), opt);
+  } else if (starts_with_zip_signature(opt.file)) {  // checkpoints are torch (zip) archives
+    print_checkpoint(opt.file, read_checkpoint_info(opt.file), opt);
   } else {
-    throw IoError(opt.file, "neither an HDF5 scene file nor a mesh format assimp can read");
+    throw IoError(opt.file,
+                  "not a scene, rollout or trace file (HDF5), a mesh assimp can read, or a "
+                  "checkpoint");
   }
 }
 
@@ -166,10 +287,12 @@ void add_info_command(CLI::App& app) {
   auto opt = std::make_shared<InfoOptions>();
   CLI::App* cmd = app.add_subcommand(
       "info",
-      "Describe a scene file (HDF5, dynscope or Physion layout) or a mesh file (any format "
-      "assimp reads): objects, roles, frames, dt, bounding boxes, vertex/face counts and the "
-      "number of model points after surface sampling and grid downsampling.");
-  cmd->add_option("file", opt->file, "Scene (.h5/.hdf5) or mesh (.obj, .ply, .stl, .glb, ...) file")
+      "Describe a file: a scene (HDF5, dynscope or Physion layout: objects, roles, frames, dt, "
+      "bounding boxes, vertex/face counts, model points after surface sampling and grid "
+      "downsampling), a mesh (any format assimp reads), a rollout, a trace or a checkpoint.");
+  cmd->add_option(
+         "file", opt->file,
+         "Scene, rollout or trace (.h5), mesh (.obj, .ply, .stl, .glb, ...) or checkpoint file")
       ->required();
   cmd->add_option("--voxel", opt->voxel,
                   "Grid downsampling voxel edge for the point counts (default: 0.2 for movi-* "

@@ -6,6 +6,7 @@
 
 #include "engine/core/error.h"
 #include "engine/io/h5_util.h"
+#include "engine/io/scene_file.h"
 #include "engine/io/temp_file.h"
 
 namespace dynscope {
@@ -219,6 +220,17 @@ ModelTrace read_trace(const std::string& path) {
     t.queries.push_back(std::move(q));
   }
   return t;
+}
+
+bool is_trace_file(const std::string& path) {
+  if (!is_hdf5_file(path)) return false;
+  h5::silence_errors();
+  try {
+    const h5::Group root = h5::Group::open_file(path);
+    return root.string_attribute("format").value_or("") == kTraceFormatName;
+  } catch (const Error&) {
+    return false;
+  }
 }
 
 }  // namespace dynscope

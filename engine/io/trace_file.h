@@ -102,6 +102,9 @@ constexpr int64_t kTraceFormatVersion = 1;
 /// level or list), IoError if the file cannot be written.
 void write_trace(const ModelTrace& trace, const std::string& path);
 
+/// True if `path` is an HDF5 file whose root "format" attribute names a trace file.
+bool is_trace_file(const std::string& path);
+
 /// Reads a trace file. Throws IoError if missing or not HDF5, FormatError naming the field for a
 /// wrong format, a missing dataset or a shape that disagrees.
 ModelTrace read_trace(const std::string& path);

@@ -2,12 +2,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "engine/io/rollout_file.h"
 #include "engine/io/trace_file.h"
+#include "tests/support/run_command.h"
 
 namespace dynscope {
 namespace {
@@ -15,8 +16,14 @@ namespace {
 namespace fs = std::filesystem;
 
 int run(const std::string& args) {
-  const std::string cmd = std::string(DYNSCOPE_BINARY) + " --log-level warn " + args + " 2>&1";
-  return std::system(cmd.c_str());
+  return test::run_dynscope("--log-level warn " + args).exit_code;
+}
+
+// `dynscope info --json FILE` must recognise each output file's kind.
+std::string info_kind(const std::string& file) {
+  const test::CommandResult r = test::run_dynscope("info --json " + file);
+  if (r.exit_code != 0) return "error: " + r.output;
+  return nlohmann::json::parse(r.output).value("kind", "");
 }
 
 TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
@@ -49,6 +56,10 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   const ModelTrace t = read_trace(trace);
   EXPECT_EQ(t.levels.size(), 2u);
   EXPECT_FALSE(t.queries.empty());
+  EXPECT_EQ(info_kind(rollout), "rollout");
+  EXPECT_EQ(info_kind(trace), "trace");
+  EXPECT_EQ(info_kind(ckpt), "checkpoint");
+  EXPECT_EQ(info_kind(scene), "scene");
   // Bad input: one clear line, non-zero exit.
   EXPECT_NE(run("eval --checkpoint " + ckpt + " --data " + data + " --split training"), 0);
   EXPECT_NE(run("rollout --checkpoint " + (dir / "missing.pt").string() + " --scene " + scene +
