@@ -96,7 +96,10 @@ void Progress::draw(bool final_draw) {
   const auto period =
       style_ == Style::kBar ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
   if (!final_draw && now - last_draw_ < period) return;
+  // A plain line already showing the final count is not repeated by finish().
+  if (final_draw && style_ == Style::kLines && done_ == last_drawn_done_) return;
   last_draw_ = now;
+  last_drawn_done_ = done_;
   if (style_ == Style::kBar) {
     std::fprintf(out_, "\r%s\033[K", render_line(30).c_str());
     if (final_draw) std::fputc('\n', out_);

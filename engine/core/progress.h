@@ -54,6 +54,7 @@ class Progress {
   std::mutex mutex_;
   std::string status_;
   bool finished_ = false;
+  int64_t last_drawn_done_ = -1;
 };
 
 }  // namespace dynscope

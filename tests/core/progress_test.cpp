@@ -52,6 +52,18 @@ TEST(ProgressTest, PlainLinesEndWithFinalReport) {
   EXPECT_EQ(out.back(), '\n');
 }
 
+TEST(ProgressTest, FinishDoesNotRepeatAPrintedFinalLine) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    Progress p("eval", 1, Progress::Style::kLines, f);
+    p.advance();  // the first advance always prints: "eval 100% 1/1 ..."
+  }
+  const std::string out = read_all(f);
+  std::fclose(f);
+  EXPECT_EQ(out.find("100%"), out.rfind("100%")) << out;
+}
+
 TEST(ProgressTest, BarStyleRedrawsInPlace) {
   std::FILE* f = std::tmpfile();
   ASSERT_NE(f, nullptr);
