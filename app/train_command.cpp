@@ -1,5 +1,6 @@
 // `dynscope train`: train a dynamics model on a generated dataset (options or a recipe file).
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -91,9 +92,13 @@ void run_train(const TrainArgs& args) {
               static_cast<long long>(r.steps), static_cast<long long>(r.steps_per_epoch),
               static_cast<long long>(r.start_step), r.last_loss, options.out.c_str());
   for (const EpochReport& e : r.epochs) {
-    std::printf("  epoch %3d  step %6lld  train loss %.5g  val loss %.5g  val rollout error %.4f\n",
-                e.epoch + 1, static_cast<long long>(e.step), e.train_loss, e.val_loss,
-                e.val_rollout_error);
+    std::printf("  epoch %3d  step %6lld  train loss %.5g", e.epoch + 1,
+                static_cast<long long>(e.step), e.train_loss);
+    if (std::isnan(e.val_loss)) {
+      std::printf("  (no validation scenes)\n");
+    } else {
+      std::printf("  val loss %.5g  val rollout error %.4f\n", e.val_loss, e.val_rollout_error);
+    }
   }
 }
 

@@ -197,6 +197,10 @@ TrainResult run(TrainOptions o, bool show_progress) {
   for (size_t i = 0; i < val_split.items.size() && static_cast<int>(i) < o.val_scenes; ++i) {
     val.push_back(load_scene(val_split.items[i].path, o.sampling));
   }
+  if (val.empty()) {
+    log_warn(o.data_dir,
+             ": the validation split is empty (or --val-scenes 0); validation is skipped");
+  }
 
   torch::manual_seed(o.seed);
   DynamicsModel model(o.model);

@@ -67,5 +67,33 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
             0);
 }
 
+TEST(CliEndToEndTest, MeshInputWithFaceReasoning) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_cli_e2e_mesh_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string data = (dir / "data").string();
+  const std::string ckpt = (dir / "mesh.pt").string();
+  ASSERT_EQ(run("generate --scenario movi-a --count 4 --seed 3 --out " + data), 0);
+  ASSERT_EQ(run("train --data " + data +
+                " --model pointconv --target acc --input mesh --faces on"
+                " --out " +
+                ckpt +
+                " --max-steps 2 --width 8 --levels 2 --bottleneck-blocks 1"
+                " --k 6 --c-mid 4 --threads 2"),
+            0);
+  const std::string scene = (fs::path(data) / "movi-a_0003.h5").string();
+  const std::string rollout = (dir / "rollout.h5").string();
+  ASSERT_EQ(run("rollout --checkpoint " + ckpt + " --scene " + scene + " --out " + rollout), 0);
+  const Rollout r = read_rollout(rollout);
+  EXPECT_GT(r.faces.rows(), 0) << "mesh input keeps the simplified faces";
+  EXPECT_EQ(r.num_frames(), 24);
+  const std::string trace = (dir / "trace.h5").string();
+  ASSERT_EQ(run("trace --checkpoint " + ckpt + " --scene " + scene + " --frame 4 --out " + trace),
+            0);
+  EXPECT_TRUE(read_trace(trace).has_mesh);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dynscope
