@@ -4,27 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <map>
-#include <utility>
 
 #include "engine/core/error.h"
+#include "tests/support/mesh_checks.h"
 
 namespace dynscope {
 namespace {
 
-// Every directed edge must appear exactly once and its reverse exactly once (closed, oriented).
-bool is_closed_oriented(const Mesh& m) {
-  std::map<std::pair<int, int>, int> edges;
-  for (Eigen::Index f = 0; f < m.num_faces(); ++f) {
-    for (int e = 0; e < 3; ++e) ++edges[{m.faces(f, e), m.faces(f, (e + 1) % 3)}];
-  }
-  for (const auto& [edge, count] : edges) {
-    if (count != 1) return false;
-    auto it = edges.find({edge.second, edge.first});
-    if (it == edges.end() || it->second != 1) return false;
-  }
-  return true;
-}
+using test::is_closed_oriented;
 
 TEST(MeshTest, BoxIsClosedOutwardWithRightAreaAndVolume) {
   const Mesh box = make_box_mesh(Vec3(1, 2, 3));
