@@ -1,4 +1,4 @@
-// `dynscope render SCENE.h5 [--view VIEW.json] [--frames a:b] [--size WxH] --out DIR` (headless).
+// `dynscope render SCENE.h5|ROLLOUT.h5 --out DIR [--view] [--frames] [--size]` (headless).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
@@ -16,9 +16,12 @@ void add_render_command(CLI::App& app) {
   auto backend = std::make_shared<std::string>("osmesa");
   CLI::App* cmd = app.add_subcommand(
       "render",
-      "Render scene frames off-screen (OSMesa, no display needed): one PNG per frame, a contact "
-      "sheet and, when ffmpeg is on PATH, an MP4. The resolved view is saved as DIR/view.json.");
-  cmd->add_option("scene", options->scene_path, "Scene file (HDF5)")->required();
+      "Render the frames of a scene or a rollout off-screen (OSMesa, no display needed): one PNG "
+      "per frame, a contact sheet and, when ffmpeg is on PATH, an MP4. A rollout is drawn as its "
+      "prediction coloured by error with the ground truth translucent. The resolved view is saved "
+      "as DIR/view.json.");
+  cmd->add_option("input", options->scene_path, "SCENE.h5|ROLLOUT.h5: scene or rollout file (HDF5)")
+      ->required();
   cmd->add_option("--view", options->view_path, "View spec JSON (camera, layers, colormap, ...)");
   cmd->add_option("--frames", options->frames,
                   "Frames a:b (a .. b-1), a:, :b or a single frame; negative counts from the end");
@@ -37,7 +40,7 @@ void add_render_command(CLI::App& app) {
       options->height = h;
     }
     auto context = render::create_context(*backend, 64, 64);
-    const render::BatchRenderResult result = render::render_scene_file(*context, *options);
+    const render::BatchRenderResult result = render::render_file(*context, *options);
     for (const std::string& note : result.notes) log_info(note);
     std::printf("wrote %zu frames to %s\n", result.frame_files.size(), options->out_dir.c_str());
     if (!result.contact_sheet.empty())

@@ -1,16 +1,19 @@
-// render_scene_file: the work behind `dynscope render` (scene -> PNGs, contact sheet, MP4).
+// The work behind `dynscope render`: scene or rollout file -> PNGs, contact sheet, MP4.
 #include "render/batch_render.h"
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 
 #include "engine/core/error.h"
 #include "engine/core/log.h"
 #include "engine/core/progress.h"
+#include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -56,6 +59,141 @@ void draw_labels(Image& image, const std::vector<std::string>& lines) {
   for (size_t i = 0; i < lines.size(); ++i) {
     draw_text(image, 5, 5 + static_cast<int>(i) * 10, lines[i], {20, 20, 20});
   }
+}
+
+// What the shared frame loop needs from a scene or a rollout; built once per input file.
+struct FrameSource {
+  std::string path;  ///< Input file (for messages).
+  int num_frames = 0;
+  double dt_s = 0.0;
+  std::function<Aabb(int, int)> bounds;  ///< Of everything drawn over frames [first, last].
+  std::function<RenderScene(int, const ViewSpec&)> frame;
+  std::function<std::vector<std::string>(int)> caption;  ///< Label lines of one frame.
+};
+
+// The view file (or the defaults with `default_layers`) with the size options applied.
+ViewSpec resolve_view(const BatchRenderOptions& options, const ViewLayers& default_layers) {
+  ViewSpec view;
+  if (options.view_path.empty()) {
+    view.layers = default_layers;
+  } else {
+    view = load_view_spec(options.view_path);
+  }
+  if (options.width > 0) view.width = options.width;
+  if (options.height > 0) view.height = options.height;
+  view.validate();
+  return view;
+}
+
+void require_out_dir(const BatchRenderOptions& options) {
+  if (options.out_dir.empty()) throw ValueError("--out", "an output directory is required");
+}
+
+// Renders the chosen frames of `source` into options.out_dir: PNGs, contact sheet, resolved
+// view and MP4. Scene and rollout rendering differ only in `source`.
+BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& options,
+                                ViewSpec view, const FrameSource& source) {
+  const int num_frames = source.num_frames;
+  if (num_frames == 0) throw FormatError(source.path, "frames", "the file has no frames");
+  const auto [first, last] = options.frames.empty() ? std::pair<int, int>(0, num_frames - 1)
+                                                    : parse_frame_range(options.frames, num_frames);
+
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec || !fs::is_directory(options.out_dir)) {
+    throw IoError(options.out_dir, "cannot create output directory: " + ec.message());
+  }
+
+  context.make_current();
+  context.resize(view.width, view.height);
+  Renderer renderer(context, options.samples);
+  Camera& camera = view.camera.camera;
+  if (view.camera.fit) {
+    camera.fit(source.bounds(first, last), static_cast<double>(view.width) / view.height);
+  }
+  const std::vector<int> sheet_frames = contact_sheet_frames(first, last, 36);
+  const int thumb_factor = std::max(1, (view.width + 239) / 240);
+
+  BatchRenderResult result;
+  std::vector<Image> thumbnails;
+  std::vector<std::string> captions;
+  Progress progress("render", last - first + 1,
+                    options.progress ? Progress::Style::kAuto : Progress::Style::kSilent);
+  for (int f = first; f <= last; ++f) {
+    view.frame = f;
+    Image image = renderer.render_image(source.frame(f, view), camera);
+    const bool on_sheet =
+        options.contact_sheet &&
+        std::find(sheet_frames.begin(), sheet_frames.end(), f) != sheet_frames.end();
+    // Thumbnails are taken before labelling: the sheet captions them itself.
+    if (on_sheet) {
+      thumbnails.push_back(downscale(image, thumb_factor));
+      captions.push_back(std::to_string(f));
+    }
+    if (view.labels) draw_labels(image, source.caption(f));
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.png", f);
+    const std::string path = (fs::path(options.out_dir) / name).string();
+    write_png(path, image);
+    result.frame_files.push_back(path);
+    progress.advance();
+  }
+  progress.finish();
+
+  if (options.contact_sheet && !thumbnails.empty()) {
+    result.contact_sheet = (fs::path(options.out_dir) / "contact_sheet.png").string();
+    write_png(result.contact_sheet, make_contact_sheet(thumbnails, captions));
+  }
+  // The resolved view (camera fixed) reopens the same picture in the viewer.
+  view.frame = first;
+  view.camera.fit = false;
+  view.camera.preset.clear();
+  result.view_file = (fs::path(options.out_dir) / "view.json").string();
+  save_view_spec(view, result.view_file);
+
+  if (options.video && last > first) {
+    const std::string ffmpeg = find_on_path("ffmpeg");
+    if (ffmpeg.empty()) {
+      result.notes.push_back("MP4 skipped: ffmpeg is not on PATH");
+    } else {
+      const std::string video = (fs::path(options.out_dir) / "render.mp4").string();
+      const std::string tmp = (fs::path(options.out_dir) / ".render.tmp.mp4").string();
+      const double fps = source.dt_s > 0 ? 1.0 / source.dt_s : 12.0;
+      std::ostringstream cmd;
+      // Even sizes are required by yuv420p; pad by one pixel when needed.
+      cmd << shell_quote(ffmpeg) << " -y -loglevel error -framerate " << fps << " -start_number "
+          << first << " -i " << shell_quote((fs::path(options.out_dir) / "frame_%04d.png").string())
+          << " -frames:v " << (last - first + 1)
+          << " -vf pad=ceil(iw/2)*2:ceil(ih/2)*2 -pix_fmt yuv420p -f mp4 " << shell_quote(tmp);
+      if (std::system(cmd.str().c_str()) == 0) {
+        fs::rename(tmp, video, ec);
+        if (ec) throw IoError(video, "cannot move the encoded video into place: " + ec.message());
+        result.video = video;
+      } else {
+        fs::remove(tmp, ec);
+        result.notes.push_back("MP4 skipped: ffmpeg failed (see its message above)");
+      }
+    }
+  }
+  return result;
+}
+
+// Rollout layers as drawn: the prediction is always coloured by its error, and a shown truth
+// becomes the ghost of the prediction so the two sets stay distinguishable.
+ViewLayers effective_rollout_layers(ViewLayers l) {
+  if (l.prediction) {
+    l.error = true;
+    if (l.ground_truth) {
+      l.ground_truth = false;
+      l.ghost = true;
+    }
+  }
+  l.level_points = l.voxels = l.neighborhoods = l.interaction_points = false;
+  return l;
+}
+
+std::string frame_caption(int f, int num_frames) {
+  return "frame " + std::to_string(f) + "/" + std::to_string(num_frames - 1);
 }
 
 }  // namespace
@@ -106,102 +244,105 @@ std::string find_on_path(const std::string& name) {
 }
 
 BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions& options) {
-  if (options.out_dir.empty()) throw ValueError("--out", "an output directory is required");
+  require_out_dir(options);
   const Scene scene = read_scene(options.scene_path);
-  ViewSpec view = options.view_path.empty() ? ViewSpec{} : load_view_spec(options.view_path);
-  if (options.width > 0) view.width = options.width;
-  if (options.height > 0) view.height = options.height;
-  view.validate();
-  const int num_frames = scene.num_frames();
-  if (num_frames == 0) throw FormatError(options.scene_path, "frames", "the scene has no frames");
-  const auto [first, last] = options.frames.empty() ? std::pair<int, int>(0, num_frames - 1)
-                                                    : parse_frame_range(options.frames, num_frames);
-
-  std::error_code ec;
-  fs::create_directories(options.out_dir, ec);
-  if (ec || !fs::is_directory(options.out_dir)) {
-    throw IoError(options.out_dir, "cannot create output directory: " + ec.message());
-  }
-
-  context.make_current();
-  context.resize(view.width, view.height);
-  Renderer renderer(context, options.samples);
-  SceneRenderData data(scene, view);
-  Camera& camera = view.camera.camera;
-  if (view.camera.fit) {
-    camera.fit(data.bounds(first, last), static_cast<double>(view.width) / view.height);
-  }
-  const std::vector<int> sheet_frames = contact_sheet_frames(first, last, 36);
-  const int thumb_factor = std::max(1, (view.width + 239) / 240);
-
-  BatchRenderResult result;
-  std::vector<Image> thumbnails;
-  std::vector<std::string> captions;
-  Progress progress("render", last - first + 1,
-                    options.progress ? Progress::Style::kAuto : Progress::Style::kSilent);
+  const ViewSpec view = resolve_view(options, ViewLayers{});
+  const SceneRenderData data(scene, view);
   const std::vector<std::string> legend = data.legend(view);
-  for (int f = first; f <= last; ++f) {
-    view.frame = f;
-    Image image = renderer.render_image(data.frame(f, view), camera);
-    const bool on_sheet =
-        options.contact_sheet &&
-        std::find(sheet_frames.begin(), sheet_frames.end(), f) != sheet_frames.end();
-    // Thumbnails are taken before labelling: the sheet captions them itself.
-    if (on_sheet) {
-      thumbnails.push_back(downscale(image, thumb_factor));
-      captions.push_back(std::to_string(f));
-    }
-    if (view.labels) {
-      std::vector<std::string> lines = {"frame " + std::to_string(f) + "/" +
-                                        std::to_string(num_frames - 1)};
-      lines.insert(lines.end(), legend.begin(), legend.end());
-      draw_labels(image, lines);
-    }
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04d.png", f);
-    const std::string path = (fs::path(options.out_dir) / name).string();
-    write_png(path, image);
-    result.frame_files.push_back(path);
-    progress.advance();
-  }
-  progress.finish();
+  FrameSource source;
+  source.path = options.scene_path;
+  source.num_frames = scene.num_frames();
+  source.dt_s = scene.dt_s;
+  source.bounds = [&](int first, int last) { return data.bounds(first, last); };
+  source.frame = [&](int f, const ViewSpec& v) { return data.frame(f, v); };
+  source.caption = [&](int f) {
+    std::vector<std::string> lines = {frame_caption(f, source.num_frames)};
+    lines.insert(lines.end(), legend.begin(), legend.end());
+    return lines;
+  };
+  return render_frames(context, options, view, source);
+}
 
-  if (options.contact_sheet && !thumbnails.empty()) {
-    result.contact_sheet = (fs::path(options.out_dir) / "contact_sheet.png").string();
-    write_png(result.contact_sheet, make_contact_sheet(thumbnails, captions));
-  }
-  // The resolved view (camera fixed) reopens the same picture in the viewer.
-  view.frame = first;
-  view.camera.fit = false;
-  view.camera.preset.clear();
-  result.view_file = (fs::path(options.out_dir) / "view.json").string();
-  save_view_spec(view, result.view_file);
+ViewLayers default_rollout_layers() {
+  ViewLayers l;
+  l.grid = true;
+  l.meshes = false;
+  l.ground_truth = false;
+  l.prediction = true;
+  l.ghost = true;
+  l.error = true;
+  return l;
+}
 
-  if (options.video && last > first) {
-    const std::string ffmpeg = find_on_path("ffmpeg");
-    if (ffmpeg.empty()) {
-      result.notes.push_back("MP4 skipped: ffmpeg is not on PATH");
-    } else {
-      const std::string video = (fs::path(options.out_dir) / "render.mp4").string();
-      const std::string tmp = (fs::path(options.out_dir) / ".render.tmp.mp4").string();
-      const double fps = scene.dt_s > 0 ? 1.0 / scene.dt_s : 12.0;
-      std::ostringstream cmd;
-      // Even sizes are required by yuv420p; pad by one pixel when needed.
-      cmd << shell_quote(ffmpeg) << " -y -loglevel error -framerate " << fps << " -start_number "
-          << first << " -i " << shell_quote((fs::path(options.out_dir) / "frame_%04d.png").string())
-          << " -frames:v " << (last - first + 1)
-          << " -vf pad=ceil(iw/2)*2:ceil(ih/2)*2 -pix_fmt yuv420p -f mp4 " << shell_quote(tmp);
-      if (std::system(cmd.str().c_str()) == 0) {
-        fs::rename(tmp, video, ec);
-        if (ec) throw IoError(video, "cannot move the encoded video into place: " + ec.message());
-        result.video = video;
-      } else {
-        fs::remove(tmp, ec);
-        result.notes.push_back("MP4 skipped: ffmpeg failed (see its message above)");
-      }
+BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptions& options) {
+  require_out_dir(options);
+  const Rollout rollout = read_rollout(options.scene_path);
+  ViewSpec view = resolve_view(options, default_rollout_layers());
+  view.layers = effective_rollout_layers(view.layers);
+  const ComparisonSeries series =
+      make_comparison_series(rollout.truth, rollout.predicted, rollout.object_ids);
+  const int num_frames = rollout.num_frames();
+
+  auto bounds = [&](int first, int last) {
+    Aabb box;
+    for (int f = std::max(0, first); f <= std::min(last, num_frames - 1); ++f) {
+      box.extend(series.truth->bounds(f));
+      box.extend(series.prediction->bounds(f));
     }
+    return box;
+  };
+  const Aabb all = bounds(0, num_frames - 1);
+  const GroundGrid grid = grid_for_bounds(all);
+  // Points a third of the sampling voxel apart would overlap; without a voxel, scale by extent.
+  float radius = view.point_radius;
+  if (radius <= 0.0f) {
+    const double extent = all.empty() ? 1.0 : (all.max - all.min).norm();
+    radius = static_cast<float>(rollout.sampling_voxel > 0 ? 0.3 * rollout.sampling_voxel
+                                                           : 0.01 * std::max(extent, 1e-3));
   }
-  return result;
+  const ViewLayers& l = view.layers;
+  std::vector<std::string> legend;
+  if (l.prediction) {
+    char text[96];
+    const float lo = view.auto_range ? 0.0f : view.range_min;
+    const float hi = view.auto_range ? std::max(series.max_error, 1e-6f) : view.range_max;
+    std::snprintf(text, sizeof(text), "prediction: error %.3g .. %.3g (%s)", lo, hi,
+                  view.colormap.c_str());
+    legend.push_back(text);
+  }
+  if (l.ghost && l.prediction) legend.push_back("truth: translucent");
+  if (l.ground_truth && !l.prediction) legend.push_back("truth");
+  if (l.ghost && l.ground_truth && !l.prediction) legend.push_back("prediction: translucent");
+
+  FrameSource source;
+  source.path = options.scene_path;
+  source.num_frames = num_frames;
+  source.dt_s = rollout.dt_s;
+  source.bounds = bounds;
+  source.frame = [&](int f, const ViewSpec& v) {
+    RenderScene out;
+    out.background = v.background;
+    out.grid = grid;
+    out.grid.visible = v.layers.grid;
+    add_comparison_layers(out, series, f, v, radius);
+    return out;
+  };
+  source.caption = [&](int f) {
+    char text[128];
+    std::snprintf(text, sizeof(text), "%s %s  mean error %.4g",
+                  frame_caption(f, num_frames).c_str(),
+                  f < rollout.observed_frames ? "observed" : "predicted",
+                  rollout.point_error[static_cast<size_t>(f)]);
+    std::vector<std::string> lines = {text};
+    lines.insert(lines.end(), legend.begin(), legend.end());
+    return lines;
+  };
+  return render_frames(context, options, view, source);
+}
+
+BatchRenderResult render_file(GlContext& context, const BatchRenderOptions& options) {
+  return is_rollout_file(options.scene_path) ? render_rollout_file(context, options)
+                                             : render_scene_file(context, options);
 }
 
 }  // namespace dynscope::render

@@ -1,4 +1,4 @@
-// Headless batch rendering of a scene file: PNG per frame, contact sheet, optional MP4.
+// Headless batch rendering of a scene or rollout file: PNG per frame, contact sheet, optional MP4.
 #pragma once
 
 #include <string>
@@ -22,10 +22,10 @@ std::string find_on_path(const std::string& name);
 
 /// What `dynscope render` does.
 struct BatchRenderOptions {
-  std::string scene_path;
-  std::string view_path;  ///< Optional view spec JSON; defaults otherwise.
-  std::string frames;     ///< parse_frame_range syntax; empty = every frame.
-  int width = 0;          ///< Overrides the view's image size when > 0.
+  std::string scene_path;  ///< Scene file, or a rollout file for render_rollout_file/render_file.
+  std::string view_path;   ///< Optional view spec JSON; defaults otherwise.
+  std::string frames;      ///< parse_frame_range syntax; empty = every frame.
+  int width = 0;           ///< Overrides the view's image size when > 0.
   int height = 0;
   std::string out_dir;
   bool contact_sheet = true;
@@ -48,5 +48,23 @@ struct BatchRenderResult {
 /// camera, when fitted, covers all rendered frames so it stays still. Throws IoError/FormatError
 /// for an unreadable or corrupt scene or view (naming the file), ValueError for bad options.
 BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions& options);
+
+/// Layers a rollout is drawn with when no view file is given: error-coloured prediction, the
+/// truth as a translucent ghost, and the ground grid.
+ViewLayers default_rollout_layers();
+
+/// Reads the rollout at `options.scene_path` (dynscope::read_rollout) and renders it like
+/// render_scene_file: per frame the predicted points coloured by their distance to the truth
+/// (the view's colormap; range from the view, or 0 .. max error over the whole rollout when
+/// auto_range), the truth as a translucent ghost when the view's ghost or ground_truth layer is
+/// on, and a caption with the frame, "observed"/"predicted" and the frame's mean point error (m).
+/// Without a view file the layers are default_rollout_layers(). The fitted camera covers truth
+/// and prediction over all rendered frames. Throws IoError/FormatError naming the file for an
+/// unreadable or corrupt rollout or view, ValueError for bad options.
+BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptions& options);
+
+/// render_rollout_file when `options.scene_path` is a rollout file (is_rollout_file), else
+/// render_scene_file; throws what they throw.
+BatchRenderResult render_file(GlContext& context, const BatchRenderOptions& options);
 
 }  // namespace dynscope::render
