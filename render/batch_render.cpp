@@ -164,7 +164,8 @@ BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& op
       cmd << shell_quote(ffmpeg) << " -y -loglevel error -framerate " << fps << " -start_number "
           << first << " -i " << shell_quote((fs::path(options.out_dir) / "frame_%04d.png").string())
           << " -frames:v " << (last - first + 1)
-          << " -vf pad=ceil(iw/2)*2:ceil(ih/2)*2 -pix_fmt yuv420p -f mp4 " << shell_quote(tmp);
+          << " -vf " << shell_quote("pad=ceil(iw/2)*2:ceil(ih/2)*2")
+          << " -pix_fmt yuv420p -f mp4 " << shell_quote(tmp);
       if (std::system(cmd.str().c_str()) == 0) {
         fs::rename(tmp, video, ec);
         if (ec) throw IoError(video, "cannot move the encoded video into place: " + ec.message());

@@ -86,6 +86,13 @@ TEST(BatchRender, WritesFramesContactSheetAndResolvedView) {
   if (find_on_path("ffmpeg").empty()) {
     ASSERT_EQ(r.notes.size(), 1u);
     EXPECT_NE(r.notes[0].find("ffmpeg"), std::string::npos);
+    EXPECT_TRUE(r.video.empty());
+  } else {
+    // ffmpeg is optional at run time; where it is installed the MP4 must really be written.
+    EXPECT_TRUE(r.notes.empty()) << r.notes[0];
+    ASSERT_FALSE(r.video.empty());
+    EXPECT_GT(fs::file_size(r.video), 0u);
+    EXPECT_FALSE(fs::exists(dir / "out" / ".render.tmp.mp4"));
   }
   options.frames = "9:";
   EXPECT_THROW(render_scene_file(testing::osmesa(), options), ValueError);
