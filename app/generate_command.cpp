@@ -12,15 +12,6 @@
 namespace dynscope::app {
 namespace {
 
-struct GenerateArgs {
-  std::string scenario;
-  int64_t count = 0;
-  uint64_t seed = 0;
-  std::string out;
-  int jobs = 1;
-  std::string meshes;
-};
-
 std::string scenario_list() {
   std::string text = "Scenarios:\n";
   for (const std::string& name : scenario_names()) {
@@ -36,32 +27,26 @@ std::string scenario_list() {
   return text;
 }
 
-void run_generate(const GenerateArgs& args) {
-  DatasetOptions options;
-  options.scenario = args.scenario;
-  options.count = args.count;
-  options.seed = args.seed;
-  options.out_dir = args.out;
-  options.jobs = args.jobs;
-  options.meshes_dir = args.meshes;
+void run_generate(const DatasetOptions& options) {
   // Every option is checked (and the output directory created) before the first scene.
   check_dataset_options(options);
-  Progress progress("generate " + args.scenario, args.count);
+  Progress progress("generate " + options.scenario, options.count);
   const DatasetSummary summary = generate_dataset(options, &progress);
   progress.finish();
-  std::printf("wrote %lld %s scenes to %s (manifest %s)\n", static_cast<long long>(args.count),
-              args.scenario.c_str(), args.out.c_str(), summary.manifest_path.c_str());
-  if (scenario_has_contact_label(args.scenario)) {
-    std::printf("target touched the zone in %lld of %lld scenes (%.0f%%)\n",
-                static_cast<long long>(summary.positives), static_cast<long long>(args.count),
-                100.0 * static_cast<double>(summary.positives) / static_cast<double>(args.count));
+  std::printf("wrote %lld %s scenes to %s (manifest %s)\n", static_cast<long long>(options.count),
+              options.scenario.c_str(), options.out_dir.c_str(), summary.manifest_path.c_str());
+  if (scenario_has_contact_label(options.scenario)) {
+    std::printf(
+        "target touched the zone in %lld of %lld scenes (%.0f%%)\n",
+        static_cast<long long>(summary.positives), static_cast<long long>(options.count),
+        100.0 * static_cast<double>(summary.positives) / static_cast<double>(options.count));
   }
 }
 
 }  // namespace
 
 void add_generate_command(CLI::App& app) {
-  auto args = std::make_shared<GenerateArgs>();
+  auto args = std::make_shared<DatasetOptions>();
   CLI::App* cmd = app.add_subcommand(
       "generate",
       "Simulate ground-truth scenes with Bullet: one HDF5 scene file per trial plus a manifest.\n"
@@ -71,11 +56,12 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--count", args->count, "Number of scenes to generate (>= 1)")->required();
   cmd->add_option("--seed", args->seed, "Base seed; scene i is seeded with derive_seed(seed, i)")
       ->capture_default_str();
-  cmd->add_option("--out", args->out, "Output directory (created if missing; files are replaced)")
+  cmd->add_option("--out", args->out_dir,
+                  "Output directory (created if missing; files are replaced)")
       ->required();
   cmd->add_option("--jobs", args->jobs, "Worker threads (>= 1); does not change the results")
       ->capture_default_str();
-  cmd->add_option("--meshes", args->meshes,
+  cmd->add_option("--meshes", args->meshes_dir,
                   "Directory of mesh files (OBJ, PLY, STL, glTF, ...) drawn as objects by movi-c");
   cmd->callback([args] { run_generate(*args); });
 }
