@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <vector>
 
 #include "engine/core/error.h"
@@ -38,6 +39,17 @@ void TempFile::commit() {
                   std::string("cannot rename the temporary file onto it: ") + std::strerror(errno));
   }
   committed_ = true;
+}
+
+void write_text_file_atomically(const std::string& path, const std::string& text) {
+  TempFile temp(path);
+  {
+    std::ofstream out(temp.path(), std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw IoError(path, "cannot write");
+  }
+  temp.commit();
 }
 
 }  // namespace dynscope

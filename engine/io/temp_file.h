@@ -1,4 +1,4 @@
-// Internal helper of engine/io: write to a temporary file next to the target, then rename.
+// Atomic file writes for every writer: write to a temporary file next to the target, then rename.
 #pragma once
 
 #include <string>
@@ -26,5 +26,9 @@ class TempFile {
   std::string temp_;
   bool committed_ = false;
 };
+
+/// Writes `text` to `path` through a TempFile, so an existing file is replaced only by a complete
+/// one. Throws IoError naming `path` if it cannot be written.
+void write_text_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace dynscope

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/core/error.h"
+#include "engine/io/temp_file.h"
 
 namespace dynscope {
 
@@ -111,7 +112,7 @@ void load_weights(torch::serialize::InputArchive& archive, const std::string& pa
 }  // namespace
 
 void save_checkpoint(const std::string& path, const DynamicsModel& model) {
-  const std::string tmp = path + ".tmp";
+  TempFile temp(path);
   try {
     torch::serialize::OutputArchive archive;
     archive.write("format", c10::IValue(kCheckpointFormat));
@@ -122,15 +123,11 @@ void save_checkpoint(const std::string& path, const DynamicsModel& model) {
     for (const auto& item : model->named_buffers(true)) {
       archive.write(item.key(), item.value().detach().to(torch::kCPU), /*is_buffer=*/true);
     }
-    archive.save_to(tmp);
+    archive.save_to(temp.path());
   } catch (const c10::Error& e) {
-    std::remove(tmp.c_str());
     throw IoError(path, std::string("cannot write checkpoint: ") + e.what_without_backtrace());
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(path, "cannot move the temporary checkpoint into place");
-  }
+  temp.commit();
 }
 
 DynamicsModel load_checkpoint(const std::string& path) {

@@ -16,6 +16,7 @@
 #include "engine/core/rng.h"
 #include "engine/io/mesh_import.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/temp_file.h"
 #include "engine/sim/scenario.h"
 
 namespace dynscope {
@@ -24,23 +25,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kManifestName = "manifest.json";
-
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string temp = path + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError(temp, "cannot be opened for writing");
-    out << text;
-    out.close();
-    if (!out) throw IoError(temp, "write failed");
-  }
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) {
-    fs::remove(temp, ec);
-    throw IoError(path, "cannot replace file: " + ec.message());
-  }
-}
 
 // Sorted paths of the files in `dir` that assimp can import.
 std::vector<std::string> mesh_files_in(const std::string& dir) {
@@ -206,7 +190,7 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
   if (error) std::rethrow_exception(error);
   summary.positives = positives;
   summary.manifest_path = (fs::path(options.out_dir) / kManifestName).string();
-  write_text_atomically(summary.manifest_path, manifest_text(options, mesh_files, summary));
+  write_text_file_atomically(summary.manifest_path, manifest_text(options, mesh_files, summary));
   log_debug("generate: wrote ", options.count, " scenes and ", summary.manifest_path);
   return summary;
 }

@@ -18,6 +18,7 @@
 #include "engine/core/progress.h"
 #include "engine/core/rng.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/temp_file.h"
 #include "engine/model/checkpoint.h"
 #include "engine/rollout/dataset_split.h"
 #include "engine/rollout/model_predictor.h"
@@ -117,27 +118,19 @@ NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target)
   return acc.finish(1e-6);
 }
 
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string temp = path + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << text;
-    if (!out) throw IoError(path, "cannot write");
-  }
-  std::filesystem::rename(temp, path);
-}
-
 void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t step,
                 const std::string& config_json) {
-  const std::string temp = path + ".tmp";
+  TempFile temp(path);
   torch::serialize::OutputArchive archive;
   optimizer.save(archive);
   archive.write("step", c10::IValue(step));
   archive.write("config", c10::IValue(config_json));
-  archive.save_to(temp);
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) throw IoError(path, "cannot write training state: " + ec.message());
+  try {
+    archive.save_to(temp.path());
+  } catch (const c10::Error& e) {
+    throw IoError(path, std::string("cannot write training state: ") + e.what_without_backtrace());
+  }
+  temp.commit();
 }
 
 int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
@@ -224,7 +217,7 @@ TrainResult run(TrainOptions o, bool show_progress) {
   result.start_step = step;
   result.steps_per_epoch = steps_per_epoch;
   CsvLog log(o.log_csv, o.resume);
-  write_text_atomically(recipe_path(o.out), o.to_json());
+  write_text_file_atomically(recipe_path(o.out), o.to_json());
   const auto t0 = std::chrono::steady_clock::now();
   std::unique_ptr<Progress> progress;
   if (show_progress) progress = std::make_unique<Progress>("train", total - step);
