@@ -14,6 +14,7 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/trace_file.h"
 #include "engine/model/checkpoint_info.h"
+#include "engine/rollout/model_points.h"
 
 namespace dynscope::app {
 namespace {
@@ -26,11 +27,6 @@ struct InfoOptions {
   bool json = false;
 };
 
-// The paper's initial grid sampling: 0.2 for Kubric-scale scenes, 0.05 for Physion scale.
-double default_voxel(const Scene& scene) {
-  return scene.scenario.rfind("movi", 0) == 0 ? 0.2 : 0.05;
-}
-
 nlohmann::json aabb_json(const Aabb& box) {
   if (box.empty()) return nullptr;
   return {{"min", {box.min.x(), box.min.y(), box.min.z()}},
@@ -38,7 +34,7 @@ nlohmann::json aabb_json(const Aabb& box) {
 }
 
 void print_scene(const std::string& path, const Scene& scene, const InfoOptions& opt) {
-  const double voxel = opt.voxel > 0 ? opt.voxel : default_voxel(scene);
+  const double voxel = opt.voxel > 0 ? opt.voxel : default_sampling_voxel(scene.scenario);
   PointCloudOptions pc_opt;
   pc_opt.voxel = voxel;
   pc_opt.oversample = opt.oversample;

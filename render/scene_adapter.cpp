@@ -11,6 +11,7 @@
 #include "engine/geometry/grid_downsample.h"
 #include "engine/geometry/interaction_points.h"
 #include "engine/geometry/neighbors.h"
+#include "engine/rollout/model_points.h"
 
 namespace dynscope::render {
 namespace {
@@ -71,10 +72,6 @@ std::shared_ptr<PointSeries> subset_series(const PointSeries& all,
 
 }  // namespace
 
-double default_voxel(const Scene& scene) {
-  return scene.scenario.rfind("movi", 0) == 0 ? 0.2 : 0.05;
-}
-
 GroundGrid grid_for_bounds(const Aabb& bounds) {
   GroundGrid grid;
   if (bounds.empty()) return grid;
@@ -92,7 +89,7 @@ SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view) : sce
   scene_.validate();
   view.validate();
   level_ = view.level;
-  voxel_ = view.voxel > 0 ? view.voxel : default_voxel(scene_);
+  voxel_ = view.voxel > 0 ? view.voxel : default_sampling_voxel(scene_.scenario);
   radius0_ = view.relation_radius > 0 ? view.relation_radius : 2.0 * voxel_;
   point_radius_ = view.point_radius > 0 ? view.point_radius : static_cast<float>(0.3 * voxel_);
   for (const Object& o : scene_.objects) {

@@ -13,10 +13,6 @@
 
 namespace dynscope::render {
 
-/// Level-0 voxel for a scene when the view leaves it at 0: the paper's 0.2 for Kubric-scale
-/// (movi-*) scenes, 0.05 for Physion scale.
-double default_voxel(const Scene& scene);
-
 /// A ground grid under `bounds` (plane z = 0, or the lowest point if it lies below 0) with a
 /// round spacing; an empty box gives the default grid.
 GroundGrid grid_for_bounds(const Aabb& bounds);
@@ -31,7 +27,7 @@ class SceneRenderData {
 
   int num_frames() const { return scene_.num_frames(); }
   const Scene& scene() const { return scene_; }
-  /// Level-0 voxel edge used (view's, or default_voxel).
+  /// Level-0 voxel edge used (view's, or default_sampling_voxel of the scenario).
   double voxel() const { return voxel_; }
   /// Voxel edge of the view's level: voxel * 1.5^level (DESIGN §5).
   double level_voxel() const;

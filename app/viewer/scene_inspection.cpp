@@ -2,13 +2,13 @@
 #include "app/viewer/scene_inspection.h"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 
 #include "engine/core/error.h"
 #include "engine/geometry/neighbors.h"
 #include "engine/model/hierarchy.h"
 #include "engine/model/model_config.h"
+#include "engine/rollout/metrics.h"
+#include "engine/rollout/model_points.h"
 
 namespace dynscope::app::viewer {
 namespace {
@@ -92,29 +92,18 @@ Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_p
 
 std::vector<double> contact_distances(const Scene& scene, const ScenePointCloud& cloud) {
   const int target = scene.find_role(Role::kTarget), zone = scene.find_role(Role::kZone);
-  if (target < 0 || zone < 0 || cloud.size() == 0) return {};
-  std::vector<Eigen::Index> target_rows, zone_rows;
-  for (Eigen::Index i = 0; i < cloud.size(); ++i) {
-    if (cloud.object[i] == target) target_rows.push_back(i);
-    if (cloud.object[i] == zone) zone_rows.push_back(i);
-  }
-  if (target_rows.empty() || zone_rows.empty()) return {};
+  if (target < 0 || zone < 0 || cloud.count_of(target) == 0 || cloud.count_of(zone) == 0) return {};
   std::vector<double> out;
-  out.reserve(scene.num_frames());
+  out.reserve(static_cast<size_t>(scene.num_frames()));
   for (int f = 0; f < scene.num_frames(); ++f) {
     const Points p = cloud.positions(scene, f);
-    double best = std::numeric_limits<double>::infinity();
-    for (Eigen::Index a : target_rows) {
-      for (Eigen::Index b : zone_rows) best = std::min(best, (p.row(a) - p.row(b)).squaredNorm());
-    }
-    out.push_back(std::sqrt(best));
+    out.push_back(
+        min_distance(select_rows(p, cloud.object, target), select_rows(p, cloud.object, zone)));
   }
   return out;
 }
 
-std::string hierarchy_preset(const Scene& scene) {
-  return scene.scenario.rfind("movi", 0) == 0 ? "kubric" : "physion";
-}
+std::string hierarchy_preset(const Scene& scene) { return default_scale_preset(scene.scenario); }
 
 std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& cloud, int frame) {
   check_frame(scene, frame);
