@@ -214,22 +214,39 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
   return out;
 }
 
-void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const {
+SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int picked,
+                                                                 int k) const {
   const int n = static_cast<int>(level_indices_.size());
-  if (view.picked_point >= n) {
-    throw ValueError("picked_point", std::to_string(view.picked_point) + " is outside the " +
+  if (picked < 0 || picked >= n) {
+    throw ValueError("picked_point", std::to_string(picked) + " is outside the " +
                                          std::to_string(n) + " points of level " +
                                          std::to_string(level_));
   }
-  Points positions(n, 3);
-  for (int i = 0; i < n; ++i) positions.row(i) = level_series_->position(frame, i).transpose();
-  const int picked = view.picked_point;
-  const Points query = positions.row(picked);
+  if (frame < 0 || frame >= num_frames()) {
+    throw ValueError(
+        "frame", std::to_string(frame) + " is outside [0, " + std::to_string(num_frames()) + ")");
+  }
+  if (k < 1) throw ValueError("neighbors", std::to_string(k) + " must be at least 1");
+  LevelNeighbors out;
+  // Exact (double) positions, not the float GPU series, so listed distances are exact.
+  const Points all = cloud_.positions(scene_, frame);
+  out.positions.resize(n, 3);
+  for (int i = 0; i < n; ++i) out.positions.row(i) = all.row(level_indices_[i]);
+  out.object = level_object_;
+  const Points query = out.positions.row(picked);
   const std::vector<int32_t> query_id = {level_object_[picked]};
-  const NeighborList same =
-      knn_same_object(query, query_id, positions, level_object_, view.neighbors);
-  const NeighborList other =
-      knn_other_objects(query, query_id, positions, level_object_, view.neighbors, level_radius());
+  out.same = knn_same_object(query, query_id, out.positions, level_object_, k);
+  out.relational =
+      knn_other_objects(query, query_id, out.positions, level_object_, k, level_radius());
+  return out;
+}
+
+void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const {
+  const int picked = view.picked_point;
+  const LevelNeighbors nb = level_neighbors(frame, picked, view.neighbors);
+  const Points& positions = nb.positions;
+  const NeighborList& same = nb.same;
+  const NeighborList& other = nb.relational;
   LineSet edges;
   edges.name = "neighbourhood";
   edges.width = 2.0f;

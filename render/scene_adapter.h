@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/scene/scene.h"
 #include "render/render_scene.h"
@@ -41,6 +42,17 @@ class SceneRenderData {
   const std::vector<int32_t>& level_indices() const { return level_indices_; }
   /// Bounds of every object over frames [first, last] (inclusive).
   Aabb bounds(int first, int last) const;
+
+  /// The level's points at one frame and the neighbourhoods of one of them.
+  struct LevelNeighbors {
+    Points positions;             ///< `[N_level,3]` level points at the frame.
+    std::vector<int32_t> object;  ///< `[N_level]` object id per level point.
+    NeighborList same;        ///< `[1,k]` same-object kNN of the picked point (itself included).
+    NeighborList relational;  ///< `[1,k]` other-object kNN within level_radius().
+  };
+  /// Neighbourhoods of level point `picked` at `frame` (what the view draws and the viewer lists).
+  /// Throws ValueError for a bad frame, point or k < 1.
+  LevelNeighbors level_neighbors(int frame, int picked, int k) const;
 
   /// The RenderScene of `frame` under `view` (same layers/level the data was built for; the
   /// picked point indexes the level's points). Throws ValueError for a bad frame or picked point.

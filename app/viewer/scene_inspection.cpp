@@ -28,13 +28,6 @@ void check_frame(const Scene& scene, int frame) {
   }
 }
 
-std::vector<int32_t> level_objects(const render::SceneRenderData& data) {
-  std::vector<int32_t> ids;
-  ids.reserve(data.level_indices().size());
-  for (int32_t i : data.level_indices()) ids.push_back(data.cloud().object_id[i]);
-  return ids;
-}
-
 }  // namespace
 
 Points level_positions(const render::SceneRenderData& data, int frame) {
@@ -67,11 +60,8 @@ PointInfo inspect_point(const render::SceneRenderData& data, int level_point, in
 Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_point, int frame,
                                 int k) {
   check_point(data, level_point);
-  if (k < 1) throw ValueError("neighbors", std::to_string(k) + " must be at least 1");
-  const Points positions = level_positions(data, frame);
-  const std::vector<int32_t> ids = level_objects(data);
-  const Points query = positions.row(level_point);
-  const std::vector<int32_t> query_id = {ids[level_point]};
+  check_frame(data.scene(), frame);
+  const render::SceneRenderData::LevelNeighbors nb = data.level_neighbors(frame, level_point, k);
   Neighborhood out;
   out.k = k;
   out.radius = data.level_radius();
@@ -79,14 +69,13 @@ Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_p
     for (Eigen::Index j = 0; j < list.index.cols(); ++j) {
       const int32_t p = list.index(0, j);
       if (!list.mask(0, j) || p == level_point) continue;
-      into.push_back({p, ids[p], (positions.row(p) - query).norm()});
+      into.push_back(
+          {p, nb.object[p], (nb.positions.row(p) - nb.positions.row(level_point)).norm()});
     }
-    std::sort(into.begin(), into.end(), [](const NeighborEntry& a, const NeighborEntry& b) {
-      return a.distance < b.distance;
-    });
   };
-  collect(knn_same_object(query, query_id, positions, ids, k), out.object);
-  collect(knn_other_objects(query, query_id, positions, ids, k, out.radius), out.relational);
+  // Valid entries come sorted by distance already (NeighborList's contract).
+  collect(nb.same, out.object);
+  collect(nb.relational, out.relational);
   return out;
 }
 
