@@ -1,6 +1,10 @@
 // Helpers shared by the subcommands.
 #include "app/cli_util.h"
 
+#include "engine/model/checkpoint_info.h"
+#include "engine/rollout/trace_capture.h"
+#include "engine/train/train_options.h"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -24,6 +28,21 @@ void require_readable_file(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) throw IoError(path, "not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot be opened for reading");
+}
+
+ModelTrace capture_checkpoint_trace(const std::string& checkpoint, const Scene& scene,
+                                    const std::string& scene_path, int frame, int level,
+                                    int picked) {
+  require_readable_file(checkpoint);
+  const CheckpointInfo info = read_checkpoint_info(checkpoint);
+  const ModelPoints points = build_model_points(scene, checkpoint_sampling(checkpoint, info.config));
+  ModelTrace trace = capture_trace(checkpoint, scene, points, frame, {});
+  if (picked >= 0) {
+    const int query = trace_level0_point(trace, level, picked);
+    trace = capture_trace(checkpoint, scene, points, frame, {query});
+  }
+  trace.scene_path = scene_path;
+  return trace;
 }
 
 }  // namespace dynscope::app

@@ -4,6 +4,8 @@
 #include <string>
 
 #include "engine/core/types.h"
+#include "engine/io/trace_file.h"
+#include "engine/scene/scene.h"
 
 namespace dynscope::app {
 
@@ -11,5 +13,13 @@ namespace dynscope::app {
 std::string format_aabb(const Aabb& box);
 /// Throws IoError if `path` does not exist or is not a regular readable file.
 void require_readable_file(const std::string& path);
+
+/// One forward pass of `checkpoint` on `scene` at `frame`, sampled as the checkpoint was trained
+/// (its recipe), with the learned filter weights of level `level`'s point `picked` when
+/// picked >= 0 (a first pass finds which level-0 point that is). Throws like capture_trace, and
+/// ValueError for a level or point the model's hierarchy does not have.
+ModelTrace capture_checkpoint_trace(const std::string& checkpoint, const Scene& scene,
+                                    const std::string& scene_path, int frame, int level,
+                                    int picked);
 
 }  // namespace dynscope::app

@@ -9,6 +9,7 @@
 #include "engine/core/progress.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/rollout/evaluation.h"
 #include "engine/rollout/metrics.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
@@ -46,16 +47,21 @@ void run_rollout_command(const RolloutArgs& args) {
   r.checkpoint_path = args.checkpoint;
   r.model_config = model.config_json;
   write_rollout(r, args.out);
-  std::printf("wrote %s: %d frames (%d observed), %lld points, end point error %.4f\n",
-              args.out.c_str(), r.num_frames(), r.observed_frames,
-              static_cast<long long>(r.num_points()), r.point_error.back());
+  const Rollout baseline = run_baseline_rollout(scene, points, options);
+  std::printf("wrote %s: %d frames (%d observed), %lld points\n", args.out.c_str(),
+              r.num_frames(), r.observed_frames, static_cast<long long>(r.num_points()));
+  std::printf("end point error %.4f (mean distance to truth at frame %d, scene units); "
+              "constant-velocity-plus-gravity baseline %.4f\n",
+              r.point_error.back(), r.num_frames() - 1, baseline.point_error.back());
   if (r.has_contact()) {
     const double threshold = kContactThresholdFraction * r.sampling_voxel;
     std::printf(
-        "target-zone contact (threshold %.4g = %.2f x voxel %.4g): truth %s, predicted %s\n",
+        "target-zone contact (threshold %.4g = %.2f x voxel %.4g): truth %s, predicted %s, "
+        "baseline %s\n",
         threshold, kContactThresholdFraction, r.sampling_voxel,
         contact_predicted(r.contact_distance_truth, threshold) ? "yes" : "no",
-        contact_predicted(r.contact_distance_predicted, threshold) ? "yes" : "no");
+        contact_predicted(r.contact_distance_predicted, threshold) ? "yes" : "no",
+        contact_predicted(baseline.contact_distance_predicted, threshold) ? "yes" : "no");
   }
 }
 

@@ -1,15 +1,21 @@
 // `dynscope train`: train a dynamics model on a generated dataset (options or a recipe file).
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
 #include "engine/core/error.h"
+#include "engine/core/progress.h"
+#include "engine/sim/dataset.h"
 #include "engine/train/trainer.h"
 
 namespace dynscope::app {
@@ -18,7 +24,8 @@ namespace {
 // Raw option values; only the options given on the command line override the recipe.
 struct TrainArgs {
   std::string recipe;
-  std::string data, out, model, target, input, faces, scale, log;
+  std::vector<std::string> data;
+  std::string out, model, target, input, faces, scale, log;
   int epochs = 0, samples = 0, batch = 0, threads = 0, checkpoint_every = 0, width = 0, levels = 0,
       bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0;
   int64_t max_steps = 0;
@@ -39,7 +46,7 @@ TrainOptions build_options(const TrainArgs& a) {
     text << in.rdbuf();
     o = TrainOptions::from_json(text.str(), a.recipe);
   }
-  if (given(a, "--data")) o.data_dir = a.data;
+  if (given(a, "--data")) o.data_dirs = a.data;
   if (given(a, "--out")) o.out = a.out;
   if (given(a, "--model")) o.model.kind = parse_model_kind(a.model);
   if (given(a, "--target")) o.model.target = parse_target_mode(a.target);
@@ -80,13 +87,34 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--val-scenes")) o.val_scenes = a.val_scenes;
   if (given(a, "--val-frames")) o.val_frames = a.val_frames;
   o.resume = a.resume;
-  if (o.data_dir.empty()) throw ValueError("data", "no dataset directory (--data or recipe)");
+  if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory (--data or recipe)");
   if (o.out.empty()) throw ValueError("out", "no checkpoint path (--out or recipe)");
   return o;
 }
 
+// A recipe's "datasets" are generated when their directory has no manifest yet, so that one
+// `dynscope train --recipe FILE` reproduces a checkpoint from nothing.
+void generate_missing_datasets(const TrainOptions& options) {
+  for (const DatasetRecipe& d : options.datasets) {
+    if (std::filesystem::exists(std::filesystem::path(d.out) / "manifest.json")) continue;
+    DatasetOptions g;
+    g.scenario = d.scenario;
+    g.count = d.count;
+    g.seed = d.seed;
+    g.out_dir = d.out;
+    g.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    check_dataset_options(g);
+    std::printf("generating %lld %s scenes (seed %llu) into %s\n", static_cast<long long>(g.count),
+                g.scenario.c_str(), static_cast<unsigned long long>(g.seed), g.out_dir.c_str());
+    Progress progress("generate " + g.scenario, g.count);
+    generate_dataset(g, &progress);
+    progress.finish();
+  }
+}
+
 void run_train(const TrainArgs& args) {
   const TrainOptions options = build_options(args);
+  generate_missing_datasets(options);
   const TrainResult r = train_model(options, /*show_progress=*/true);
   std::printf("trained %lld steps (%lld per epoch, started at %lld), last loss %.5g; wrote %s\n",
               static_cast<long long>(r.steps), static_cast<long long>(r.steps_per_epoch),
@@ -111,11 +139,14 @@ void add_train_command(CLI::App& app) {
       "Train a dynamics model (Adam, Huber loss on p(t+1), one random frame per scene per draw,\n"
       "random-walk noise on input velocities). Writes CKPT, CKPT.state (for --resume) and\n"
       "CKPT.recipe.json (every resolved option; `--recipe CKPT.recipe.json` repeats the run).\n"
+      "A recipe's \"datasets\" list is generated first when a directory has no manifest, so\n"
+      "`dynscope train --recipe assets/recipes/NAME.json` reproduces a shipped checkpoint.\n"
       "Defaults follow the paper's supplement by dataset scale (movi-* = kubric: lr 5e-3,\n"
       "15 epochs, each scene sampled 2x per epoch; otherwise physion: lr 1e-3, 30 epochs, 8x).");
   a->cmd = cmd;
   cmd->add_option("--recipe", a->recipe, "JSON file of options; command-line options override it");
-  cmd->add_option("--data", a->data, "Dataset directory written by `dynscope generate`");
+  cmd->add_option("--data", a->data,
+                  "Dataset directories written by `dynscope generate` (one or more, one scale)");
   cmd->add_option("--out", a->out, "Checkpoint file to write");
   cmd->add_option("--model", a->model, "pointconv, gnn or flat");
   cmd->add_option("--target", a->target, "acc or vel");

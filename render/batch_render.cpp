@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <sstream>
 
 #include "engine/core/error.h"
@@ -15,6 +16,7 @@
 #include "engine/core/progress.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/trace_file.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
 #include "render/renderer.h"
@@ -81,6 +83,14 @@ ViewSpec resolve_view(const BatchRenderOptions& options, const ViewLayers& defau
   }
   if (options.width > 0) view.width = options.width;
   if (options.height > 0) view.height = options.height;
+  if (options.level >= 0) {
+    view.level = options.level;
+    view.layers.level_points = true;
+  }
+  if (options.picked_point >= 0) {
+    view.picked_point = options.picked_point;
+    view.layers.neighborhoods = true;
+  }
   view.validate();
   return view;
 }
@@ -244,11 +254,17 @@ std::string find_on_path(const std::string& name) {
   return "";
 }
 
-BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions& options) {
-  require_out_dir(options);
+BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions& given) {
+  require_out_dir(given);
+  BatchRenderOptions options = given;
   const Scene scene = read_scene(options.scene_path);
+  std::shared_ptr<const ModelTrace> trace;
+  if (!options.trace_path.empty()) {
+    trace = std::make_shared<const ModelTrace>(read_trace(options.trace_path));
+    if (options.frames.empty()) options.frames = std::to_string(trace->frame);
+  }
   const ViewSpec view = resolve_view(options, ViewLayers{});
-  const SceneRenderData data(scene, view);
+  const SceneRenderData data(scene, view, trace);
   const std::vector<std::string> legend = data.legend(view);
   FrameSource source;
   source.path = options.scene_path;
@@ -264,10 +280,33 @@ BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions
   return render_frames(context, options, view, source);
 }
 
+// The scene a rollout started from, for its meshes: the stored path as given, else next to the
+// rollout file. Empty optional (with the reason in `why`) when neither can be read.
+std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& rollout_path,
+                                   std::string* why) {
+  std::vector<std::string> candidates = {rollout.scene_path};
+  if (!rollout.scene_path.empty()) {
+    candidates.push_back(
+        (fs::path(rollout_path).parent_path() / fs::path(rollout.scene_path).filename()).string());
+  }
+  for (const std::string& c : candidates) {
+    if (c.empty() || !fs::is_regular_file(c)) continue;
+    try {
+      return read_scene(c);
+    } catch (const Error& e) {
+      *why = e.what();
+      return std::nullopt;
+    }
+  }
+  *why = rollout.scene_path.empty() ? "the rollout names no scene file"
+                                    : "scene file " + rollout.scene_path + " not found";
+  return std::nullopt;
+}
+
 ViewLayers default_rollout_layers() {
   ViewLayers l;
   l.grid = true;
-  l.meshes = false;
+  l.meshes = true;
   l.ground_truth = false;
   l.prediction = true;
   l.ghost = true;
@@ -315,6 +354,42 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
   if (l.ground_truth && !l.prediction) legend.push_back("truth");
   if (l.ghost && l.ground_truth && !l.prediction) legend.push_back("prediction: translucent");
 
+  // Meshes follow the shown point set: the fitted predicted poses, or the truth's.
+  std::string mesh_note;
+  std::optional<Scene> scene;
+  std::vector<std::shared_ptr<MeshGeometry>> geometry(static_cast<size_t>(rollout.num_objects()));
+  if (l.meshes) {
+    scene = rollout_scene(rollout, options.scene_path, &mesh_note);
+    for (int i = 0; scene && i < rollout.num_objects(); ++i) {
+      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
+      const bool rigid = rollout.pose_rigid[static_cast<size_t>(i)] != 0;
+      if (index < 0 || !rigid || scene->objects[static_cast<size_t>(index)].mesh.empty()) continue;
+      geometry[static_cast<size_t>(i)] =
+          make_mesh_geometry(scene->objects[static_cast<size_t>(index)].mesh);
+    }
+    if (scene) legend.push_back(l.prediction ? "meshes: predicted poses" : "meshes: true poses");
+  }
+  auto add_meshes = [&](RenderScene& out, int f, const ViewSpec& v) {
+    if (!v.layers.meshes || !scene) return;
+    for (int i = 0; i < rollout.num_objects(); ++i) {
+      if (!geometry[static_cast<size_t>(i)]) continue;
+      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
+      const Object& o = scene->objects[static_cast<size_t>(index)];
+      MeshInstance m;
+      m.name = o.name;
+      m.geometry = geometry[static_cast<size_t>(i)];
+      m.color = o.color.cast<float>();
+      m.opacity = 0.3f;  // the error-coloured points on the surface stay visible
+      m.smooth = true;
+      const Pose& pose =
+          v.layers.prediction
+              ? rollout.poses[static_cast<size_t>(f)][static_cast<size_t>(i)]
+              : scene->trajectories[static_cast<size_t>(index)].poses[static_cast<size_t>(f)];
+      m.model = pose_matrix(pose, o.scale);  // rest coordinates carry the scale
+      out.meshes.push_back(std::move(m));
+    }
+  };
+
   FrameSource source;
   source.path = options.scene_path;
   source.num_frames = num_frames;
@@ -325,6 +400,7 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
     out.background = v.background;
     out.grid = grid;
     out.grid.visible = v.layers.grid;
+    add_meshes(out, f, v);
     add_comparison_layers(out, series, f, v, radius);
     return out;
   };
@@ -338,7 +414,9 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
     lines.insert(lines.end(), legend.begin(), legend.end());
     return lines;
   };
-  return render_frames(context, options, view, source);
+  BatchRenderResult result = render_frames(context, options, view, source);
+  if (l.meshes && !scene) result.notes.push_back("meshes skipped: " + mesh_note);
+  return result;
 }
 
 BatchRenderResult render_file(GlContext& context, const BatchRenderOptions& options) {

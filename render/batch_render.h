@@ -24,6 +24,10 @@ std::string find_on_path(const std::string& name);
 struct BatchRenderOptions {
   std::string scene_path;  ///< Scene file, or a rollout file for render_rollout_file/render_file.
   std::string view_path;   ///< Optional view spec JSON; defaults otherwise.
+  std::string trace_path;  ///< Scenes: model trace (`dynscope trace`) whose levels, neighbour
+                           ///< lists and filter weights are drawn; frames default to its frame.
+  int level = -1;          ///< >= 0: show this U-Net level's points (overrides the view).
+  int picked_point = -1;   ///< >= 0: show this level point's neighbourhoods (overrides the view).
   std::string frames;      ///< parse_frame_range syntax; empty = every frame.
   int width = 0;           ///< Overrides the view's image size when > 0.
   int height = 0;
@@ -43,7 +47,9 @@ struct BatchRenderResult {
   std::vector<std::string> notes;        ///< e.g. why the MP4 was skipped
 };
 
-/// Reads the scene (dynscope::read_scene), renders the chosen frames with `context` (resized to
+/// Reads the scene (dynscope::read_scene) and, when options.trace_path is set, the model trace
+/// (levels, neighbour lists and filter weights then come from it: SceneRenderData), renders the
+/// chosen frames with `context` (resized to
 /// the image size) and writes every output atomically into `out_dir` (created if needed). The
 /// camera, when fitted, covers all rendered frames so it stays still. Throws IoError/FormatError
 /// for an unreadable or corrupt scene or view (naming the file), ValueError for bad options.

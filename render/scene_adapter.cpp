@@ -22,6 +22,8 @@ const Color kRelationEdgeColor(1.00f, 0.50f, 0.00f);
 const Color kInteractionColor(0.10f, 0.70f, 0.30f);
 const Color kPredictionColor(0.95f, 0.45f, 0.10f);
 const Color kDimmedColor(0.78f, 0.78f, 0.78f);
+const Color kSourceColor(0.55f, 0.20f, 0.75f);
+const Color kFeedColor(0.20f, 0.70f, 0.70f);
 
 // Largest of 1, 2, 5 x 10^k not above `value`.
 double round_spacing(double value) {
@@ -85,10 +87,69 @@ GroundGrid grid_for_bounds(const Aabb& bounds) {
   return grid;
 }
 
-SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view) : scene_(scene) {
+namespace {
+
+// The list `name` of a trace level linking `query_level` to `source_level`, or null.
+const TraceList* find_list(const ModelTrace& trace, int level, const std::string& name) {
+  for (const TraceList& list : trace.levels[static_cast<size_t>(level)].lists) {
+    if (list.name == name) return &list;
+  }
+  return nullptr;
+}
+
+// Row `row` of a trace list as a one-row NeighborList (empty when the list is absent).
+NeighborList list_row(const TraceList* list, int row) {
+  NeighborList out;
+  out.index = IndexMatrix(1, 0);
+  out.mask = MaskMatrix(1, 0);
+  if (!list || row >= list->index.rows()) return out;
+  out.index = list->index.row(row);
+  out.mask = list->mask.row(row);
+  return out;
+}
+
+// ‖h‖ per neighbour of the first traced PointConv at (level, row) over list "level/name".
+std::vector<double> filter_weights(const ModelTrace& trace, int level, int row,
+                                   const std::string& name, std::string* conv) {
+  const std::string list = std::to_string(level) + "/" + name;
+  for (const TraceQuery& q : trace.queries) {
+    if (q.level != level || q.query_index != row || q.list != list) continue;
+    std::vector<double> out(static_cast<size_t>(q.weights.rows()), 0.0);
+    for (Eigen::Index k = 0; k < q.weights.rows(); ++k) {
+      if (q.mask[static_cast<size_t>(k)]) out[static_cast<size_t>(k)] = q.weights.row(k).norm();
+    }
+    *conv = q.conv;
+    return out;
+  }
+  return {};
+}
+
+// Voxel grids of the model are anchored at (min x, min y, 0) of the level-0 points.
+Vec3 trace_grid_anchor(const ModelTrace& trace) {
+  const Points& p = trace.levels.front().points;
+  if (p.rows() == 0) return Vec3::Zero();
+  return Vec3(p.col(0).minCoeff(), p.col(1).minCoeff(), 0.0);
+}
+
+}  // namespace
+
+SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view,
+                                 std::shared_ptr<const ModelTrace> trace)
+    : scene_(scene), trace_(std::move(trace)) {
   scene_.validate();
   view.validate();
   level_ = view.level;
+  if (trace_) {
+    if (level_ >= static_cast<int>(trace_->levels.size())) {
+      throw ValueError("level", std::to_string(level_) + " is not a level of the trace (it has " +
+                                    std::to_string(trace_->levels.size()) + ")");
+    }
+    if (trace_->frame < 0 || trace_->frame >= scene_.num_frames()) {
+      throw ValueError("trace", "frame " + std::to_string(trace_->frame) +
+                                    " is not a frame of the scene (" +
+                                    std::to_string(scene_.num_frames()) + " frames)");
+    }
+  }
   voxel_ = view.voxel > 0 ? view.voxel : default_sampling_voxel(scene_.scenario);
   radius0_ = view.relation_radius > 0 ? view.relation_radius : 2.0 * voxel_;
   point_radius_ = view.point_radius > 0 ? view.point_radius : static_cast<float>(0.3 * voxel_);
@@ -99,6 +160,13 @@ SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view) : sce
   const bool need_points =
       l.ground_truth || l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
   if (!need_points || scene_.num_frames() == 0) return;
+  if (trace_) {
+    const TraceLevel& level = trace_->levels[static_cast<size_t>(level_)];
+    level_series_ = make_point_series({level.points});
+    level_series_->colors = categorical_colors(level.object_ids);
+    level_object_ = level.object_ids;
+    if (!l.ground_truth) return;
+  }
   PointCloudOptions options;
   options.voxel = voxel_;
   cloud_ = build_point_cloud(scene_, options);
@@ -107,6 +175,7 @@ SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view) : sce
   for (int f = 0; f < scene_.num_frames(); ++f) frames.push_back(cloud_.positions(scene_, f));
   cloud_series_ = make_point_series(frames);
   cloud_series_->colors = categorical_colors(cloud_.object_id);
+  if (trace_) return;
   if (level_ == 0) {
     level_indices_.resize(cloud_.size());
     for (Eigen::Index i = 0; i < cloud_.size(); ++i) level_indices_[i] = static_cast<int32_t>(i);
@@ -119,8 +188,23 @@ SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view) : sce
   for (int32_t i : level_indices_) level_object_.push_back(cloud_.object_id[i]);
 }
 
-double SceneRenderData::level_voxel() const { return voxel_ * std::pow(1.5, level_); }
-double SceneRenderData::level_radius() const { return radius0_ * std::pow(1.5, level_); }
+double SceneRenderData::level_voxel() const {
+  if (trace_ && level_ > 0) return trace_->levels[static_cast<size_t>(level_)].voxel;
+  return voxel_ * std::pow(1.5, level_);
+}
+double SceneRenderData::level_radius() const {
+  if (trace_) return trace_->levels[static_cast<size_t>(level_)].radius;
+  return radius0_ * std::pow(1.5, level_);
+}
+
+void SceneRenderData::check_trace_frame(int frame) const {
+  if (trace_ && frame != trace_->frame) {
+    throw ValueError("frame", "the model trace holds frame " + std::to_string(trace_->frame) +
+                                  " only; level points and neighbourhoods cannot be drawn at "
+                                  "frame " +
+                                  std::to_string(frame));
+  }
+}
 float SceneRenderData::point_radius() const { return point_radius_; }
 
 Aabb SceneRenderData::bounds(int first, int last) const {
@@ -181,11 +265,14 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
     out.points.push_back(layer);
   }
   const float level_radius = point_radius_ * static_cast<float>(std::pow(1.5, level_));
-  if (l.level_points && level_series_ && (level_ > 0 || !l.ground_truth)) {
+  const bool trace_layers = l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
+  if (trace_ && trace_layers) check_trace_frame(frame);
+  const int level_frame = trace_ ? 0 : frame;  // a trace's level series holds its one frame
+  if (l.level_points && level_series_ && (trace_ || level_ > 0 || !l.ground_truth)) {
     PointLayer layer;
     layer.name = "level " + std::to_string(level_);
     layer.series = level_series_;
-    layer.frame = frame;
+    layer.frame = level_frame;
     layer.coloring = dim ? PointColoring::kUniform : PointColoring::kPerPoint;
     layer.color = kDimmedColor;
     layer.radius = dim ? 0.7f * level_radius : level_radius;
@@ -193,17 +280,19 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
   }
   if (l.voxels && level_series_) {
     const double v = level_voxel();
+    const Vec3 anchor = trace_ ? trace_grid_anchor(*trace_) : Vec3::Zero();
     std::set<std::tuple<int64_t, int64_t, int64_t, int32_t>> cells;
     for (int i = 0; i < level_series_->num_points; ++i) {
-      const Vec3 p = level_series_->position(frame, i);
+      const Vec3 p = level_series_->position(level_frame, i) - anchor;
       cells.emplace(static_cast<int64_t>(std::floor(p.x() / v)),
                     static_cast<int64_t>(std::floor(p.y() / v)),
                     static_cast<int64_t>(std::floor(p.z() / v)), level_object_[i]);
     }
     for (const auto& [x, y, z, id] : cells) {
       WireBox box;
-      box.min = Eigen::Vector3f(static_cast<float>(x * v), static_cast<float>(y * v),
-                                static_cast<float>(z * v));
+      box.min = Eigen::Vector3f(static_cast<float>(x * v + anchor.x()),
+                                static_cast<float>(y * v + anchor.y()),
+                                static_cast<float>(z * v + anchor.z()));
       box.max = box.min + Eigen::Vector3f::Constant(static_cast<float>(v));
       box.color = categorical_color(id) * 0.7f;
       out.boxes.push_back(box);
@@ -216,7 +305,7 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
 
 SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int picked,
                                                                  int k) const {
-  const int n = static_cast<int>(level_indices_.size());
+  const int n = level_size();
   if (picked < 0 || picked >= n) {
     throw ValueError("picked_point", std::to_string(picked) + " is outside the " +
                                          std::to_string(n) + " points of level " +
@@ -228,6 +317,41 @@ SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int 
   }
   if (k < 1) throw ValueError("neighbors", std::to_string(k) + " must be at least 1");
   LevelNeighbors out;
+  if (trace_) {
+    check_trace_frame(frame);
+    const ModelTrace& t = *trace_;
+    out.positions = t.levels[static_cast<size_t>(level_)].points;
+    out.object = level_object_;
+    out.same = list_row(find_list(t, level_, "same"), picked);
+    out.relational = list_row(find_list(t, level_, "relational"), picked);
+    out.same_weight = filter_weights(t, level_, picked, "same", &out.same_conv);
+    out.relational_weight = filter_weights(t, level_, picked, "relational", &out.relational_conv);
+    if (level_ > 0) {
+      const Points& below = t.levels[static_cast<size_t>(level_ - 1)].points;
+      const NeighborList down = list_row(find_list(t, level_, "down"), picked);
+      for (Eigen::Index j = 0; j < down.k(); ++j) {
+        if (down.mask(0, j)) out.sources.push_back(down.index(0, j));
+      }
+      if (const TraceList* up = find_list(t, level_, "up")) {
+        for (Eigen::Index row = 0; row < up->index.rows(); ++row) {
+          for (Eigen::Index j = 0; j < up->index.cols(); ++j) {
+            if (up->mask(row, j) && up->index(row, j) == picked) {
+              out.feeds.push_back(static_cast<int32_t>(row));
+              break;
+            }
+          }
+        }
+      }
+      auto rows = [&](const std::vector<int32_t>& idx) {
+        Points p(static_cast<Eigen::Index>(idx.size()), 3);
+        for (size_t i = 0; i < idx.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = below.row(idx[i]);
+        return p;
+      };
+      out.source_positions = rows(out.sources);
+      out.feed_positions = rows(out.feeds);
+    }
+    return out;
+  }
   // Exact (double) positions, not the float GPU series, so listed distances are exact.
   const Points all = cloud_.positions(scene_, frame);
   out.positions.resize(n, 3);
@@ -245,43 +369,62 @@ void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewS
   const int picked = view.picked_point;
   const LevelNeighbors nb = level_neighbors(frame, picked, view.neighbors);
   const Points& positions = nb.positions;
-  const NeighborList& same = nb.same;
-  const NeighborList& other = nb.relational;
   LineSet edges;
   edges.name = "neighbourhood";
   edges.width = 2.0f;
   const Vec3 center = positions.row(picked).transpose();
-  std::vector<Vec3> same_list, other_list;
-  for (Eigen::Index k = 0; k < same.k(); ++k) {
-    const int32_t j = same.index(0, k);
-    if (!same.mask(0, k) || j == picked) continue;
-    edges.add(center, positions.row(j).transpose(), kObjectEdgeColor);
-    same_list.push_back(positions.row(j).transpose());
-  }
-  for (Eigen::Index k = 0; k < other.k(); ++k) {
-    if (!other.mask(0, k)) continue;
-    const int32_t j = other.index(0, k);
-    edges.add(center, positions.row(j).transpose(), kRelationEdgeColor);
-    other_list.push_back(positions.row(j).transpose());
-  }
-  out.lines.push_back(std::move(edges));
   const float r = point_radius_ * static_cast<float>(std::pow(1.5, level_));
-  auto add_points = [&](const std::vector<Vec3>& list, const Color& color, float radius,
-                        const std::string& name) {
-    if (list.empty()) return;
-    Points p(static_cast<Eigen::Index>(list.size()), 3);
-    for (size_t i = 0; i < list.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = list[i];
+  // One list's neighbours: edges and points in the list's colour, or (when the trace holds the
+  // learned filter) points coloured by ‖h(p_k − p_0)‖ through viridis over the list's range.
+  auto add_list = [&](const NeighborList& list, const std::vector<double>& weight,
+                      const Color& color, bool skip_self, const std::string& name) {
+    std::vector<Vec3> ends;
+    std::vector<float> scalars;
+    for (Eigen::Index k = 0; k < list.k(); ++k) {
+      const int32_t j = list.index(0, k);
+      if (!list.mask(0, k) || (skip_self && j == picked)) continue;
+      edges.add(center, positions.row(j).transpose(), color);
+      ends.push_back(positions.row(j).transpose());
+      if (!weight.empty()) scalars.push_back(static_cast<float>(weight[static_cast<size_t>(k)]));
+    }
+    if (ends.empty()) return;
+    Points p(static_cast<Eigen::Index>(ends.size()), 3);
+    for (size_t i = 0; i < ends.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = ends[i];
+    PointLayer layer;
+    layer.name = name;
+    const std::shared_ptr<PointSeries> series = make_point_series({p});
+    series->scalars = scalars;
+    layer.series = series;
+    layer.coloring = PointColoring::kUniform;
+    layer.color = color;
+    layer.radius = 1.25f * r;
+    layer.pickable = false;
+    if (!scalars.empty()) {
+      layer.coloring = PointColoring::kScalar;
+      layer.colormap = "viridis";
+      layer.range_min = 0.0f;
+      layer.range_max = std::max(*std::max_element(scalars.begin(), scalars.end()), 1e-6f);
+    }
+    out.points.push_back(layer);
+  };
+  add_list(nb.same, nb.same_weight, kObjectEdgeColor, true, "object neighbours");
+  add_list(nb.relational, nb.relational_weight, kRelationEdgeColor, false,
+           "relational neighbours");
+  // Level k−1 points pooled into the picked point (purple) and those it feeds when upsampling.
+  auto add_level_below = [&](const Points& p, const Color& color, const std::string& name) {
+    if (p.rows() == 0) return;
+    for (Eigen::Index i = 0; i < p.rows(); ++i) edges.add(center, p.row(i).transpose(), color);
     PointLayer layer;
     layer.name = name;
     layer.series = make_point_series({p});
-    layer.coloring = PointColoring::kUniform;
     layer.color = color;
-    layer.radius = radius;
+    layer.radius = 0.8f * r / 1.5f;
     layer.pickable = false;
     out.points.push_back(layer);
   };
-  add_points(same_list, kObjectEdgeColor, 1.25f * r, "object neighbours");
-  add_points(other_list, kRelationEdgeColor, 1.25f * r, "relational neighbours");
+  add_level_below(nb.source_positions, kSourceColor, "pooled from level below");
+  add_level_below(nb.feed_positions, kFeedColor, "fed when upsampling");
+  out.lines.push_back(std::move(edges));
   PointLayer highlight;
   highlight.name = "picked point";
   highlight.series = single_point(center);
@@ -333,15 +476,21 @@ std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
   if (l.ground_truth) lines.push_back("points: " + std::to_string(cloud_.size()));
   if (l.level_points || l.voxels) {
     char text[96];
-    std::snprintf(text, sizeof(text), "level %d: %zu points, voxel %.3g", level_,
-                  level_indices_.size(), level_voxel());
+    std::snprintf(text, sizeof(text), "level %d: %d points, voxel %.3g%s", level_, level_size(),
+                  level_voxel(), trace_ ? " (model trace)" : "");
     lines.push_back(text);
   }
   if (l.neighborhoods && view.picked_point >= 0) {
     char text[128];
+    const TraceList* same = trace_ ? find_list(*trace_, level_, "same") : nullptr;
+    const int k = same ? static_cast<int>(same->index.cols()) : view.neighbors;
     std::snprintf(text, sizeof(text), "point %d: knn %d (blue), r %.3g (orange)", view.picked_point,
-                  view.neighbors, level_radius());
+                  k, level_radius());
     lines.push_back(text);
+    if (trace_) {
+      lines.push_back("neighbour colour: norm of h(p_k - p_0) (viridis) where traced");
+      if (level_ > 0) lines.push_back("purple: pooled from level below; teal: fed when upsampling");
+    }
   }
   if (l.interaction_points) lines.push_back("interaction points (green)");
   return lines;

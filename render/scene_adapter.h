@@ -8,6 +8,7 @@
 
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
+#include "engine/io/trace_file.h"
 #include "engine/scene/scene.h"
 #include "render/render_scene.h"
 #include "render/view_spec.h"
@@ -21,10 +22,19 @@ GroundGrid grid_for_bounds(const Aabb& bounds);
 /// Everything derived once from a Scene to draw any of its frames: shared mesh geometry, the
 /// point cloud of every frame as one PointSeries, and the points of the view's U-Net level.
 /// Building it samples points, so it is done once per scene and view, not per frame.
+///
+/// Without a trace, levels are the scene's surface points grid-downsampled per object in the
+/// rest frame (a preview that keeps identity over time). With a model trace (one forward pass,
+/// `dynscope trace`), levels, voxels, neighbour lists and the learned filter weights are the
+/// model's own, exactly as its forward pass at the trace's frame saw them; level layers and
+/// neighbourhoods then exist at that frame only.
 class SceneRenderData {
  public:
-  /// Copies `scene` (validated; throws ValueError) and prepares what `view` asks for.
-  SceneRenderData(const Scene& scene, const ViewSpec& view);
+  /// Copies `scene` (validated; throws ValueError) and prepares what `view` asks for. A `trace`
+  /// must have the view's level (ValueError "level") and a frame of the scene (ValueError
+  /// "trace").
+  SceneRenderData(const Scene& scene, const ViewSpec& view,
+                  std::shared_ptr<const ModelTrace> trace = nullptr);
 
   int num_frames() const { return scene_.num_frames(); }
   const Scene& scene() const { return scene_; }
@@ -43,14 +53,29 @@ class SceneRenderData {
   /// Bounds of every object over frames [first, last] (inclusive).
   Aabb bounds(int first, int last) const;
 
+  /// The model trace the levels come from, or null.
+  const ModelTrace* trace() const { return trace_.get(); }
+  /// Number of points of the view's level.
+  int level_size() const { return static_cast<int>(level_object_.size()); }
+
   /// The level's points at one frame and the neighbourhoods of one of them.
   struct LevelNeighbors {
     Points positions;             ///< `[N_level,3]` level points at the frame.
     std::vector<int32_t> object;  ///< `[N_level]` object id per level point.
     NeighborList same;        ///< `[1,k]` same-object kNN of the picked point (itself included).
     NeighborList relational;  ///< `[1,k]` other-object kNN within level_radius().
+    /// Trace only: ‖h(p_k − p_0)‖ of the first traced PointConv over each list entry (`[k]`,
+    /// 0 where masked), empty when the trace holds no filter weights for the point; the conv's
+    /// module path.
+    std::vector<double> same_weight, relational_weight;
+    std::string same_conv, relational_conv;
+    /// Trace only, level ≥ 1: level−1 points pooled into the picked point (down list) and the
+    /// level−1 points whose upsampling reads it (up list), with their positions `[n,3]`.
+    std::vector<int32_t> sources, feeds;
+    Points source_positions = Points(0, 3), feed_positions = Points(0, 3);
   };
   /// Neighbourhoods of level point `picked` at `frame` (what the view draws and the viewer lists).
+  /// With a trace the lists are the model's (k is its K) and `frame` must be the trace's.
   /// Throws ValueError for a bad frame, point or k < 1.
   LevelNeighbors level_neighbors(int frame, int picked, int k) const;
 
@@ -64,7 +89,10 @@ class SceneRenderData {
   void add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const;
   void add_interaction_points(RenderScene& out, int frame) const;
 
+  void check_trace_frame(int frame) const;
+
   Scene scene_;
+  std::shared_ptr<const ModelTrace> trace_;
   int level_ = 0;
   double voxel_ = 0.05;
   double radius0_ = 0.1;

@@ -233,4 +233,25 @@ bool is_trace_file(const std::string& path) {
   }
 }
 
+int trace_level0_point(const ModelTrace& trace, int level, int index) {
+  if (level < 0 || level >= static_cast<int>(trace.levels.size())) {
+    throw ValueError("level", std::to_string(level) + " is not a level of the trace (it has " +
+                                  std::to_string(trace.levels.size()) + ")");
+  }
+  const auto size = [&](int l) { return trace.levels[static_cast<size_t>(l)].points.rows(); };
+  if (index < 0 || index >= size(level)) {
+    throw ValueError("point", std::to_string(index) + " is outside the " +
+                                  std::to_string(size(level)) + " points of level " +
+                                  std::to_string(level));
+  }
+  for (int l = level; l > 0; --l) {
+    const std::vector<int32_t>& kept = trace.levels[static_cast<size_t>(l)].kept;
+    if (static_cast<Eigen::Index>(kept.size()) != size(l)) {
+      throw ValueError("kept", "level " + std::to_string(l) + " has no kept indices");
+    }
+    index = kept[static_cast<size_t>(index)];
+  }
+  return index;
+}
+
 }  // namespace dynscope

@@ -93,6 +93,10 @@ struct ModelTrace {
   std::vector<TraceQuery> queries;
 };
 
+/// The level-0 point that level `level`'s point `index` is (levels keep points of the level below:
+/// follows `kept` down). Throws ValueError for a level or index the trace does not have.
+int trace_level0_point(const ModelTrace& trace, int level, int index);
+
 /// Name stored in the root "format" attribute of trace files.
 constexpr const char* kTraceFormatName = "dynscope-trace";
 /// Current trace file version.

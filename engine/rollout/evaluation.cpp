@@ -66,6 +66,18 @@ void accumulate(ScenarioSummary& s, const SceneEvaluation& e) {
 
 }  // namespace
 
+const char* const kBaselineDescription =
+    "constant velocity + gravity (p(t+1) = p(t) + v(t) - g dt^2 z), Kabsch-rigidified, "
+    "floor clamp at z = 0";
+
+Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
+                             RolloutOptions options) {
+  options.floor_clamp = true;
+  return run_rollout(scene, points,
+                     constant_velocity_predictor(default_gravity(scene.scenario), scene.dt_s),
+                     options);
+}
+
 EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
                            const EvalOptions& options, Progress* progress) {
   EvalSummary out;
@@ -96,11 +108,7 @@ EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model
         e.model_min_distance = min_of(m.contact_distance_predicted);
       }
       if (options.baseline) {
-        RolloutOptions bo = ro;
-        bo.floor_clamp = true;
-        const Rollout b = run_rollout(
-            scene, points, constant_velocity_predictor(default_gravity(scene.scenario), scene.dt_s),
-            bo);
+        const Rollout b = run_baseline_rollout(scene, points, ro);
         e.baseline_curve = b.point_error;
         if (e.has_contact) {
           e.baseline_contact = contact_predicted(b.contact_distance_predicted, out.threshold);
@@ -129,9 +137,7 @@ std::string eval_to_json(const EvalSummary& s) {
   j["observed_frames"] = s.observed_frames;
   j["sampling_voxel"] = s.voxel;
   j["contact_threshold"] = s.threshold;
-  j["baseline"] =
-      "constant velocity + gravity (p(t+1) = p(t) + v(t) - g dt^2 z), Kabsch-rigidified, "
-      "floor clamp at z = 0";
+  j["baseline"] = kBaselineDescription;
   for (const auto& [name, a] : s.scenarios) {
     j["scenarios"][name] = {{"scenes", a.scenes},
                             {"end_error", a.model_end_error},

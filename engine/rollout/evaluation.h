@@ -63,6 +63,14 @@ struct EvalSummary {
   std::map<std::string, ScenarioSummary> scenarios;  ///< Per scenario, plus "all".
 };
 
+/// The physics-free floor of every comparison: constant velocity plus the scenario's gravity,
+/// Kabsch-rigidified, clamped at the floor z = 0, rolled out like a model (`options` as given,
+/// floor clamp forced on).
+Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
+                             RolloutOptions options);
+/// One line naming the baseline, for tables and JSON.
+extern const char* const kBaselineDescription;
+
 /// Rolls out `model` (and the baseline) on every scene of `split`, reporting each scene to
 /// `progress`. Throws like read_scene, build_model_points and run_rollout (the message names the
 /// scene file).

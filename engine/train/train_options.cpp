@@ -12,7 +12,19 @@ namespace dynscope {
 
 std::string TrainOptions::to_json() const {
   nlohmann::json j;
-  j["data"] = data_dir;
+  if (!description.empty()) j["description"] = description;
+  if (data_dirs.size() == 1) {
+    j["data"] = data_dirs.front();
+  } else {
+    j["data"] = data_dirs;
+  }
+  if (!datasets.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const DatasetRecipe& d : datasets) {
+      list.push_back({{"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}});
+    }
+    j["datasets"] = list;
+  }
   j["out"] = out;
   j["scale"] = scale;
   j["model_config"] = nlohmann::json::parse(model.to_json());
@@ -36,6 +48,7 @@ std::string TrainOptions::to_json() const {
   j["threads"] = threads;
   j["seed"] = seed;
   j["log"] = log_csv;
+  if (!notes_json.empty()) j["notes"] = nlohmann::json::parse(notes_json);
   return j.dump(2) + "\n";
 }
 
@@ -55,7 +68,29 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
       field = name;
       if (j.contains(name)) value = j.at(name).get<std::decay_t<decltype(value)>>();
     };
-    get("data", o.data_dir);
+    field = "data";
+    if (j.contains("data")) {
+      if (j.at("data").is_array()) {
+        o.data_dirs = j.at("data").get<std::vector<std::string>>();
+      } else {
+        o.data_dirs = {j.at("data").get<std::string>()};
+      }
+    }
+    get("description", o.description);
+    field = "datasets";
+    if (j.contains("datasets")) {
+      o.datasets.clear();
+      for (const auto& d : j.at("datasets")) {
+        DatasetRecipe r;
+        r.out = d.at("out").get<std::string>();
+        r.scenario = d.at("scenario").get<std::string>();
+        r.count = d.at("count").get<int64_t>();
+        r.seed = d.value("seed", uint64_t{0});
+        o.datasets.push_back(r);
+      }
+    }
+    field = "notes";
+    if (j.contains("notes")) o.notes_json = j.at("notes").dump();
     get("out", o.out);
     get("scale", o.scale);
     field = "model_config";
@@ -104,7 +139,10 @@ void TrainOptions::resolve(const std::string& scenario) {
   const ModelConfig preset = ModelConfig::preset(scale);
   const bool kubric = scale == "kubric";
   if (!set_voxel) model.voxel = preset.voxel;
-  if (!set_radius) model.radius = preset.radius;
+  if (!set_radius) {
+    model.radius = preset.radius;
+    model.interaction_threshold = preset.interaction_threshold;
+  }
   if (epochs == 0) epochs = kubric ? 15 : 30;
   if (samples_per_scene == 0) samples_per_scene = kubric ? 2 : 8;
   if (lr == 0) lr = kubric ? 5e-3 : 1e-3;
@@ -131,6 +169,12 @@ void TrainOptions::resolve(const std::string& scenario) {
   if (val_scenes < 0) throw ValueError("val-scenes", "must be >= 0");
   if (threads < 0) throw ValueError("threads", "must be >= 0");
   if (out.empty()) throw ValueError("out", "no checkpoint path given");
+  if (data_dirs.empty()) throw ValueError("data", "no dataset directory given");
+  for (const DatasetRecipe& d : datasets) {
+    if (d.out.empty() || d.scenario.empty() || d.count < 1) {
+      throw ValueError("datasets", "every entry needs out, scenario and count >= 1");
+    }
+  }
 }
 
 std::string train_state_path(const std::string& checkpoint) { return checkpoint + ".state"; }

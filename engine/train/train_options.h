@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "engine/model/model_config.h"
 #include "engine/rollout/model_points.h"
@@ -12,14 +13,29 @@ namespace dynscope {
 /// Everything `dynscope train` needs. Zero-valued "auto" fields are filled by resolve() from the
 /// dataset's scale (paper supplement: Kubric lr 5e-3, 15 epochs, N = 2; Physion lr 1e-3,
 /// 30 epochs, N = 8).
+/// A dataset a recipe can create itself: `dynscope generate --scenario S --count N --seed SEED
+/// --out DIR`, run by `dynscope train` when DIR has no manifest yet.
+struct DatasetRecipe {
+  std::string out;
+  std::string scenario;
+  int64_t count = 0;
+  uint64_t seed = 0;
+};
+
 struct TrainOptions {
-  std::string data_dir;
+  std::vector<std::string> data_dirs;  ///< One or more `dynscope generate` outputs, all of one
+                                       ///< scale (e.g. every Physion-like scenario).
+  std::vector<DatasetRecipe> datasets;  ///< How to regenerate data_dirs (recipe files).
+  std::string description;              ///< What the recipe trains (free text).
+  std::string notes_json;               ///< "notes" of a recipe file (any JSON, kept verbatim):
+                                        ///< wall time, dataset size, final losses of the run.
   std::string out;            ///< Checkpoint path; CKPT.state and CKPT.recipe.json sit next to it.
   std::string scale;          ///< "kubric" | "physion" | "" (from the scenario: movi-* → kubric).
   ModelConfig model;          ///< Architecture; voxel and radius come from the scale preset unless
                               ///< set_voxel/set_radius.
   bool set_voxel = false;     ///< model.voxel was given explicitly.
-  bool set_radius = false;    ///< model.radius was given explicitly.
+  bool set_radius = false;    ///< model.radius (and model.interaction_threshold) was given
+                              ///< explicitly; otherwise both come from the scale preset.
   bool faces = true;          ///< Mesh input: interaction-point reasoning; off runs the point
                               ///< model on the simplified mesh vertices.
   SamplingOptions sampling;   ///< Model points (input follows `model.input`).

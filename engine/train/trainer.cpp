@@ -176,22 +176,41 @@ struct CsvLog {
 };
 
 TrainResult run(TrainOptions o, bool show_progress) {
-  const DatasetSplit train_split = read_dataset_split(o.data_dir, "train");
-  const DatasetSplit val_split = read_dataset_split(o.data_dir, "val");
-  if (train_split.items.empty()) {
-    throw ValueError("data", o.data_dir + " has no training scenes");
+  if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory given");
+  std::vector<DatasetSplit> train_splits, val_splits;
+  for (const std::string& dir : o.data_dirs) {
+    train_splits.push_back(read_dataset_split(dir, "train"));
+    val_splits.push_back(read_dataset_split(dir, "val"));
+    if (train_splits.back().items.empty()) {
+      throw ValueError("data", dir + " has no training scenes");
+    }
+    const std::string& first = train_splits.front().scenario;
+    const std::string& scenario = train_splits.back().scenario;
+    if (default_scale_preset(scenario) != default_scale_preset(first) ||
+        default_sampling_voxel(scenario) != default_sampling_voxel(first)) {
+      throw ValueError("data", "cannot train on " + first + " and " + scenario +
+                                   " together: their scenes have different scales");
+    }
   }
-  o.resolve(train_split.scenario);
+  o.resolve(train_splits.front().scenario);
   set_torch_threads(o.threads);
 
   std::vector<SceneData> train, val;
-  for (const DatasetItem& item : train_split.items)
-    train.push_back(load_scene(item.path, o.sampling));
-  for (size_t i = 0; i < val_split.items.size() && static_cast<int>(i) < o.val_scenes; ++i) {
-    val.push_back(load_scene(val_split.items[i].path, o.sampling));
+  for (const DatasetSplit& split : train_splits) {
+    for (const DatasetItem& item : split.items) train.push_back(load_scene(item.path, o.sampling));
+  }
+  // Validation scenes are taken round-robin over the datasets so each scenario is represented.
+  for (size_t i = 0; static_cast<int>(val.size()) < o.val_scenes; ++i) {
+    bool any = false;
+    for (const DatasetSplit& split : val_splits) {
+      if (i >= split.items.size() || static_cast<int>(val.size()) >= o.val_scenes) continue;
+      val.push_back(load_scene(split.items[i].path, o.sampling));
+      any = true;
+    }
+    if (!any) break;
   }
   if (val.empty()) {
-    log_warn(o.data_dir,
+    log_warn(o.data_dirs.front(),
              ": the validation split is empty (or --val-scenes 0); validation is skipped");
   }
 

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <memory>
+
 #include "engine/core/error.h"
 #include "render_test_util.h"
 
@@ -69,6 +72,112 @@ TEST(SceneAdapter, VoxelBoxesHaveTheLevelVoxelSize) {
   for (const WireBox& b : frame.boxes) {
     EXPECT_NEAR(b.max.x() - b.min.x(), 0.075f, 1e-5f);
   }
+}
+
+// A two-level trace by hand: level 0 has 4 points (objects 0,0,0,1), level 1 keeps points 0 and 3.
+ModelTrace two_level_trace(int frame) {
+  ModelTrace t;
+  t.frame = frame;
+  TraceLevel l0;
+  l0.points.resize(4, 3);
+  l0.points << 0.1, 0.2, 0.0, 0.3, 0.2, 0.0, 0.1, 0.4, 0.0, 0.6, 0.2, 0.1;
+  l0.object_ids = {0, 0, 0, 1};
+  l0.radius = 0.5;
+  TraceList same0{"same", 0, 0, IndexMatrix(4, 2), MaskMatrix(4, 2)};
+  same0.index << 0, 1, 1, 0, 2, 0, 3, -1;
+  same0.mask << 1, 1, 1, 1, 1, 1, 1, 0;
+  l0.lists.push_back(same0);
+  TraceList rel0{"relational", 0, 0, IndexMatrix(4, 1), MaskMatrix(4, 1)};
+  rel0.index << 3, 3, -1, 1;
+  rel0.mask << 1, 1, 0, 1;
+  l0.lists.push_back(rel0);
+  TraceLevel l1;
+  l1.points.resize(2, 3);
+  l1.points << 0.1, 0.2, 0.0, 0.6, 0.2, 0.1;
+  l1.object_ids = {0, 1};
+  l1.kept = {0, 3};
+  l1.voxel = 0.3;
+  l1.radius = 0.75;
+  TraceList down{"down", 1, 0, IndexMatrix(2, 3), MaskMatrix(2, 3)};
+  down.index << 0, 1, 2, 3, -1, -1;
+  down.mask << 1, 1, 1, 1, 0, 0;
+  l1.lists.push_back(down);
+  TraceList up{"up", 0, 1, IndexMatrix(4, 1), MaskMatrix(4, 1)};
+  up.index << 0, 0, 0, 1;
+  up.mask << 1, 1, 1, 1;
+  l1.lists.push_back(up);
+  t.levels = {l0, l1};
+  TraceQuery q;
+  q.point = 0;
+  q.conv = "unet.stem.0.object.conv";
+  q.level = 0;
+  q.list = "0/same";
+  q.query_index = 0;
+  q.neighbors = {0, 1};
+  q.mask = {1, 1};
+  q.weights.resize(2, 2);
+  q.weights << 3.0, 4.0, 0.0, 1.0;
+  t.queries.push_back(q);
+  return t;
+}
+
+TEST(SceneAdapter, TraceGivesTheModelsLevelsListsAndFilterWeights) {
+  const Scene scene = testing::shapes_scene(3);
+  const auto trace = std::make_shared<const ModelTrace>(two_level_trace(1));
+  ViewSpec view;
+  view.layers.level_points = true;
+  view.layers.neighborhoods = true;
+  view.picked_point = 0;
+  SceneRenderData level0(scene, view, trace);
+  EXPECT_EQ(level0.level_size(), 4);
+  const auto nb = level0.level_neighbors(1, 0, 16);
+  ASSERT_EQ(nb.same.k(), 2);
+  EXPECT_EQ(nb.same.index(0, 1), 1);
+  ASSERT_EQ(nb.relational.k(), 1);
+  EXPECT_EQ(nb.relational.index(0, 0), 3);
+  ASSERT_EQ(nb.same_weight.size(), 2u);
+  EXPECT_DOUBLE_EQ(nb.same_weight[0], 5.0);
+  EXPECT_DOUBLE_EQ(nb.same_weight[1], 1.0);
+  EXPECT_EQ(nb.same_conv, "unet.stem.0.object.conv");
+  EXPECT_TRUE(nb.relational_weight.empty());
+  EXPECT_DOUBLE_EQ(level0.level_radius(), 0.5);
+  // The trace holds one frame: level layers elsewhere are a clear error, plain frames are fine.
+  EXPECT_NO_THROW(level0.frame(1, view));
+  EXPECT_THROW(level0.frame(2, view), ValueError);
+  ViewSpec plain;
+  EXPECT_NO_THROW(level0.frame(2, plain));
+  // The neighbour points carry ‖h‖ as scalars for the colormap.
+  const RenderScene frame = level0.frame(1, view);
+  bool coloured = false;
+  for (const PointLayer& p : frame.points) {
+    if (p.name == "object neighbours") {
+      coloured = p.coloring == PointColoring::kScalar && p.series->scalars.size() == 1u &&
+                 p.series->scalars[0] == 1.0f;
+    }
+  }
+  EXPECT_TRUE(coloured);
+
+  view.level = 1;
+  view.layers.voxels = true;
+  SceneRenderData level1(scene, view, trace);
+  EXPECT_EQ(level1.level_size(), 2);
+  EXPECT_DOUBLE_EQ(level1.level_voxel(), 0.3);
+  const auto nb1 = level1.level_neighbors(1, 0, 16);
+  EXPECT_EQ(nb1.sources, (std::vector<int32_t>{0, 1, 2}));
+  EXPECT_EQ(nb1.feeds, (std::vector<int32_t>{0, 1, 2}));
+  EXPECT_EQ(level1.level_neighbors(1, 1, 16).feeds, (std::vector<int32_t>{3}));
+  // Voxel boxes sit on the model's grid, anchored at (min x, min y, 0) of the level-0 points.
+  const RenderScene f1 = level1.frame(1, view);
+  ASSERT_EQ(f1.boxes.size(), 2u);
+  for (const WireBox& b : f1.boxes) {
+    const float r = std::fmod(b.min.x() - 0.1f + 3.0f, 0.3f);
+    EXPECT_LT(std::min(r, 0.3f - r), 1e-5f) << "box at x = " << b.min.x();
+    EXPECT_NEAR(b.max.x() - b.min.x(), 0.3f, 1e-5f);
+  }
+  EXPECT_EQ(trace_level0_point(*trace, 1, 1), 3);
+  EXPECT_THROW(trace_level0_point(*trace, 2, 0), ValueError);
+  view.level = 2;
+  EXPECT_THROW(SceneRenderData(scene, view, trace), ValueError);
 }
 
 TEST(SceneAdapter, ComparisonCarriesPerPointErrors) {

@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -65,6 +67,47 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   EXPECT_NE(run("rollout --checkpoint " + (dir / "missing.pt").string() + " --scene " + scene +
                 " --out " + rollout),
             0);
+}
+
+TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_cli_e2e_recipe_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string data = (dir / "data").string();
+  const std::string recipe = (dir / "recipe.json").string();
+  const nlohmann::json r = {
+      {"description", "tiny"},
+      {"datasets", {{{"out", data + "/drop"}, {"scenario", "drop"}, {"count", 10}, {"seed", 4}},
+                    {{"out", data + "/roll"}, {"scenario", "roll"}, {"count", 10}, {"seed", 4}}}},
+      {"data", {data + "/drop", data + "/roll"}},
+      {"out", (dir / "a.pt").string()},
+      {"model_config", {{"width", 8}, {"levels", 2}, {"bottleneck_blocks", 1}, {"k", 6},
+                        {"k_relational", 6}, {"c_mid", 4}}},
+      {"max_steps", 2},
+      {"val_scenes", 1},
+      {"threads", 1},
+      {"seed", 3},
+      {"notes", {{"wall_time_s", 1.0}}}};
+  {
+    std::ofstream(recipe) << r.dump(2);
+  }
+  ASSERT_EQ(run("train --recipe " + recipe), 0);
+  EXPECT_TRUE(fs::exists(fs::path(data) / "drop" / "manifest.json"));
+  EXPECT_TRUE(fs::exists(fs::path(data) / "roll" / "manifest.json"));
+  // The written recipe keeps datasets and notes; running it again gives the same weights.
+  const std::string again = (dir / "b.pt").string();
+  ASSERT_EQ(run("train --recipe " + (dir / "a.pt.recipe.json").string() + " --out " + again), 0);
+  std::ifstream a(dir / "a.pt", std::ios::binary), b(again, std::ios::binary);
+  const std::string bytes_a((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+  const std::string bytes_b((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(info_kind(again), "checkpoint");
+  const nlohmann::json written =
+      nlohmann::json::parse(std::ifstream(dir / "a.pt.recipe.json"));
+  EXPECT_EQ(written.at("datasets").size(), 2u);
+  EXPECT_EQ(written.at("notes").at("wall_time_s"), 1.0);
+  EXPECT_EQ(bytes_a.size(), bytes_b.size());
+  fs::remove_all(dir);
 }
 
 TEST(CliEndToEndTest, MeshInputWithFaceReasoning) {

@@ -5,6 +5,7 @@
 #include <torch/torch.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "engine/core/error.h"
@@ -35,7 +36,7 @@ const std::string& dataset_dir() {
 
 TrainOptions tiny_options(const std::string& out) {
   TrainOptions o;
-  o.data_dir = dataset_dir();
+  o.data_dirs = {dataset_dir()};
   o.out = out;
   o.model.width = 8;
   o.model.levels = 2;
@@ -99,12 +100,58 @@ TEST(TrainerTest, ResumeWithAnotherArchitectureIsAClearError) {
   EXPECT_THROW(train_model(o), Error);
 }
 
+TEST(TrainerTest, TrainsOnSeveralDatasetsOfOneScaleAndRejectsMixedScales) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_multi_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  DatasetOptions g;
+  g.scenario = "collide";
+  g.count = 10;
+  g.seed = 6;
+  g.out_dir = (dir / "collide").string();
+  generate_dataset(g);
+  TrainOptions o = tiny_options((dir / "multi.pt").string());
+  o.data_dirs.push_back(g.out_dir);
+  o.val_scenes = 2;
+  o.samples_per_scene = 1;
+  o.epochs = 1;
+  const TrainResult r = train_model(o);
+  EXPECT_EQ(r.steps_per_epoch, 16) << "8 training scenes from each of the two datasets";
+  ASSERT_EQ(r.epochs.size(), 1u);
+  EXPECT_TRUE(std::isfinite(r.epochs[0].val_loss));
+
+  g.scenario = "movi-a";
+  g.count = 10;
+  g.out_dir = (dir / "movi-a").string();
+  generate_dataset(g);
+  TrainOptions mixed = tiny_options((dir / "mixed.pt").string());
+  mixed.data_dirs.push_back(g.out_dir);
+  try {
+    train_model(mixed);
+    FAIL() << "drop and movi-a have different scales";
+  } catch (const ValueError& e) {
+    EXPECT_EQ(e.name(), "data");
+  }
+  fs::remove_all(dir);
+}
+
 TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   TrainOptions o = tiny_options("x.pt");
   o.model.kind = ModelKind::kGnn;
   o.noise_std = 0.002;
+  o.data_dirs.push_back("other");
+  o.description = "a test recipe";
+  o.datasets = {{"data/drop", "drop", 10, 5}, {"other", "collide", 20, 6}};
+  o.notes_json = R"({"wall_time_s":12.5,"final":{"loss":0.1}})";
   const TrainOptions back = TrainOptions::from_json(o.to_json(), "recipe.json");
   EXPECT_EQ(back.to_json(), o.to_json());
+  EXPECT_EQ(back.data_dirs, o.data_dirs);
+  ASSERT_EQ(back.datasets.size(), 2u);
+  EXPECT_EQ(back.datasets[1].scenario, "collide");
+  EXPECT_EQ(back.datasets[1].count, 20);
+  EXPECT_EQ(back.datasets[1].seed, 6u);
+  EXPECT_EQ(TrainOptions::from_json(R"({"data":"one"})", "r.json").data_dirs,
+            std::vector<std::string>{"one"});
   TrainOptions k = back;
   k.resolve("movi-a");
   EXPECT_EQ(k.scale, "kubric");
@@ -112,6 +159,7 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   EXPECT_EQ(k.epochs, 15);
   EXPECT_EQ(k.samples_per_scene, 2);
   EXPECT_DOUBLE_EQ(k.model.voxel, 0.3);
+  EXPECT_DOUBLE_EQ(k.model.interaction_threshold, 0.4) << "threshold follows the scale preset";
   TrainOptions p = back;
   p.resolve("drop");
   EXPECT_DOUBLE_EQ(p.lr, 1e-3);
@@ -121,6 +169,12 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
     FAIL();
   } catch (const FormatError& e) {
     EXPECT_EQ(e.field(), "epochs");
+  }
+  try {
+    TrainOptions::from_json(R"({"datasets":[{"scenario":"drop"}]})", "r.json");
+    FAIL();
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.field(), "datasets");
   }
 }
 

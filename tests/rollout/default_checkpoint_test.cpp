@@ -1,0 +1,47 @@
+// Regression guard for the shipped default model: it loads, and its rollout of each bundled
+// movi-a sample ends closer to the truth than the constant-velocity-plus-gravity baseline.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "engine/io/scene_file.h"
+#include "engine/rollout/evaluation.h"
+#include "engine/rollout/model_predictor.h"
+#include "engine/train/train_options.h"
+
+namespace dynscope {
+namespace {
+
+const std::string kSource = DYNSCOPE_SOURCE_DIR;
+const std::string kDefaultCheckpoint = kSource + "/assets/models/movi-a_pointconv_acc.pt";
+
+TEST(DefaultCheckpointTest, LoadsAndDescribesItself) {
+  ASSERT_TRUE(std::filesystem::exists(kDefaultCheckpoint)) << kDefaultCheckpoint;
+  const LoadedModel model = load_model(kDefaultCheckpoint);
+  EXPECT_EQ(model.config.kind, ModelKind::kPointConv);
+  EXPECT_EQ(model.config.target, TargetMode::kAcceleration);
+  EXPECT_EQ(model.config.input, InputMode::kPoints);
+  const SamplingOptions sampling = checkpoint_sampling(kDefaultCheckpoint, model.config);
+  EXPECT_GT(sampling.voxel, 0.0) << "the recipe next to the checkpoint gives its sampling";
+}
+
+TEST(DefaultCheckpointTest, BeatsConstantVelocityBaselineOnBundledSamples) {
+  set_torch_threads(2);
+  const LoadedModel model = load_model(kDefaultCheckpoint);
+  const SamplingOptions sampling = checkpoint_sampling(kDefaultCheckpoint, model.config);
+  for (const char* name : {"movi-a_0000.h5", "movi-a_0001.h5"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = read_scene(kSource + "/assets/scenes/" + name);
+    const ModelPoints points = build_model_points(scene, sampling);
+    RolloutOptions options;
+    options.observed_frames = 3;
+    const Rollout predicted = run_rollout(scene, points, model.predict, options);
+    const Rollout baseline = run_baseline_rollout(scene, points, options);
+    ASSERT_EQ(predicted.num_frames(), scene.num_frames());
+    EXPECT_LT(predicted.point_error.back(), baseline.point_error.back());
+  }
+}
+
+}  // namespace
+}  // namespace dynscope
