@@ -58,6 +58,29 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   const ModelTrace t = read_trace(trace);
   EXPECT_EQ(t.levels.size(), 2u);
   EXPECT_FALSE(t.queries.empty());
+  // render draws the model's own level and lists: from the trace file, or traced on the fly.
+  const fs::path frames = dir / "frames";
+  ASSERT_EQ(run("render " + scene + " --trace " + trace + " --level 1 --pick 0 --no-video --out " +
+                (frames / "a").string()),
+            0);
+  EXPECT_TRUE(fs::exists(frames / "a" / "frame_0004.png")) << "frames default to the trace's";
+  EXPECT_NE(run("render " + scene + " --trace " + trace + " --level 1 --pick 0 --frames 5"
+                " --no-video --out " + (frames / "b").string()),
+            0)
+      << "a trace holds one frame";
+  ASSERT_EQ(run("render " + scene + " --checkpoint " + ckpt + " --frames 6 --level 1 --pick 1"
+                " --no-video --out " + (frames / "c").string()),
+            0);
+  EXPECT_TRUE(fs::exists(frames / "c" / "frame_0006.png"));
+  const ModelTrace traced = read_trace((frames / "c" / "trace.h5").string());
+  EXPECT_EQ(traced.frame, 6);
+  EXPECT_FALSE(traced.queries.empty()) << "the picked point's filter weights are traced";
+  for (const TraceQuery& q : traced.queries) {
+    if (q.level == 1) EXPECT_EQ(q.query_index, 1) << q.conv;
+  }
+  EXPECT_NE(run("render " + scene + " --checkpoint " + ckpt + " --level 1 --pick 100000"
+                " --no-video --out " + (frames / "d").string()),
+            0);
   EXPECT_EQ(info_kind(rollout), "rollout");
   EXPECT_EQ(info_kind(trace), "trace");
   EXPECT_EQ(info_kind(ckpt), "checkpoint");
