@@ -2,6 +2,7 @@
 #include "app/cli_util.h"
 
 #include "engine/model/checkpoint_info.h"
+#include "engine/rollout/model_predictor.h"
 #include "engine/rollout/trace_capture.h"
 #include "engine/train/train_options.h"
 
@@ -28,6 +29,22 @@ void require_readable_file(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) throw IoError(path, "not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot be opened for reading");
+}
+
+Rollout rollout_checkpoint(const std::string& checkpoint, const Scene& scene,
+                           const std::string& scene_path, const RolloutOptions& options,
+                           double voxel, Progress* progress, ModelPoints* points_out) {
+  require_readable_file(checkpoint);
+  const LoadedModel model = load_model(checkpoint);
+  SamplingOptions sampling = checkpoint_sampling(checkpoint, model.config);
+  if (voxel > 0) sampling.voxel = voxel;
+  ModelPoints points = build_model_points(scene, sampling);
+  Rollout r = run_rollout(scene, points, model.predict, options, progress);
+  r.scene_path = scene_path;
+  r.checkpoint_path = checkpoint;
+  r.model_config = model.config_json;
+  if (points_out) *points_out = std::move(points);
+  return r;
 }
 
 ModelTrace capture_checkpoint_trace(const std::string& checkpoint, const Scene& scene,

@@ -4,7 +4,10 @@
 #include <string>
 
 #include "engine/core/types.h"
+#include "engine/core/progress.h"
 #include "engine/io/trace_file.h"
+#include "engine/rollout/rollout_runner.h"
+#include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
 
 namespace dynscope::app {
@@ -13,6 +16,15 @@ namespace dynscope::app {
 std::string format_aabb(const Aabb& box);
 /// Throws IoError if `path` does not exist or is not a regular readable file.
 void require_readable_file(const std::string& path);
+
+/// Rolls `checkpoint` out on `scene` (read from `scene_path`), sampled as the checkpoint was
+/// trained unless `voxel` > 0, advancing `progress` once per predicted frame; the result names
+/// the scene, the checkpoint and the model config. Throws IoError for a missing checkpoint and
+/// what load_model / run_rollout throw.
+Rollout rollout_checkpoint(const std::string& checkpoint, const Scene& scene,
+                           const std::string& scene_path, const RolloutOptions& options,
+                           double voxel = 0.0, Progress* progress = nullptr,
+                           ModelPoints* points_out = nullptr);
 
 /// One forward pass of `checkpoint` on `scene` at `frame`, sampled as the checkpoint was trained
 /// (its recipe), with the learned filter weights of level `level`'s point `picked` when

@@ -68,7 +68,8 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--checkpoint", args->checkpoint, "Checkpoint written by `dynscope train`")
       ->required();
   cmd->add_option("--data", args->data, "Dataset directory (with manifest.json)")->required();
-  cmd->add_option("--split", args->split, "train, val or test")->capture_default_str();
+  cmd->add_option("--split", args->split,
+                  "train, val, test, or all (every scene: a held-out dataset generated apart)")->capture_default_str();
   cmd->add_option("--json", args->json, "Also write every number as JSON to this file");
   cmd->add_option("--observed", args->observed, "Ground-truth frames before prediction (>= 3)")
       ->capture_default_str();

@@ -31,21 +31,16 @@ void run_rollout_command(const RolloutArgs& args) {
   require_readable_file(args.checkpoint);
   require_readable_file(args.scene);
   set_torch_threads(args.threads);
-  const LoadedModel model = load_model(args.checkpoint);
   const Scene scene = read_scene(args.scene);
-  SamplingOptions sampling = checkpoint_sampling(args.checkpoint, model.config);
-  if (args.voxel > 0) sampling.voxel = args.voxel;
-  const ModelPoints points = build_model_points(scene, sampling);
   RolloutOptions options;
   options.observed_frames = args.observed;
   options.frames = args.frames;
   const int frames = args.frames > 0 ? args.frames : scene.num_frames();
   Progress progress("rollout", std::max(0, frames - args.observed));
-  Rollout r = run_rollout(scene, points, model.predict, options, &progress);
+  ModelPoints points;
+  const Rollout r =
+      rollout_checkpoint(args.checkpoint, scene, args.scene, options, args.voxel, &progress, &points);
   progress.finish();
-  r.scene_path = args.scene;
-  r.checkpoint_path = args.checkpoint;
-  r.model_config = model.config_json;
   write_rollout(r, args.out);
   const Rollout baseline = run_baseline_rollout(scene, points, options);
   std::printf("wrote %s: %d frames (%d observed), %lld points\n", args.out.c_str(),

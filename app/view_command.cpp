@@ -1,11 +1,16 @@
-// `dynscope view [SCENE.h5] [--view VIEW.json] [--screenshot OUT.png] [--size WxH]`: the viewer.
+// `dynscope view [SCENE|ROLLOUT|TRACE.h5] [--checkpoint A.pt [--compare B.pt]] [--trace TRACE.h5]
+// [--view VIEW.json] [--screenshot OUT.png] [--size WxH]`: the viewer, with the model behind it.
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <thread>
 
+#include "app/cli_util.h"
 #include "app/commands.h"
 #include "app/viewer/glfw_platform.h"
+#include "app/viewer/model_services.h"
 #include "app/viewer/null_platform.h"
 #include "app/viewer/platform.h"
 #include "app/viewer/viewer_app.h"
@@ -19,14 +24,42 @@ namespace {
 
 struct ViewOptions {
   std::string scene_path;
+  std::string checkpoint;
+  std::string compare;
+  std::string trace_path;
   std::string view_path;
   std::string screenshot;
   std::string size;
   int warmup_frames = 3;
 };
 
+// The viewer's model: checkpoints through the engine's LibTorch code (loaded per call, so the
+// background thread owns what it loads).
+class EngineModelServices : public viewer::ModelServices {
+ public:
+  Rollout rollout(const viewer::RolloutRequest& request, Progress* progress) override {
+    RolloutOptions options;
+    options.observed_frames = request.observed_frames;
+    return rollout_checkpoint(request.checkpoint, request.scene, request.scene_path, options, 0.0,
+                              progress);
+  }
+  ModelTrace trace(const std::string& checkpoint, const Scene& scene, const std::string& scene_path,
+                   int frame, int level, int picked) override {
+    return capture_checkpoint_trace(checkpoint, scene, scene_path, frame, level, picked);
+  }
+};
+
 void load_inputs(viewer::ViewerApp& app, const ViewOptions& o) {
-  if (!o.scene_path.empty()) app.open_scene(o.scene_path);
+  if (!o.scene_path.empty()) app.open_file(o.scene_path);
+  if (!o.trace_path.empty()) app.open_trace(o.trace_path);
+  if (!o.checkpoint.empty()) {
+    require_readable_file(o.checkpoint);
+    app.set_checkpoint(o.checkpoint);
+  }
+  if (!o.compare.empty()) {
+    require_readable_file(o.compare);
+    app.start_rollouts(o.compare);
+  }
   if (!o.view_path.empty()) app.open_view(o.view_path);
 }
 
@@ -34,10 +67,15 @@ void run_headless(const ViewOptions& o, int width, int height) {
   auto context = render::create_context("osmesa", width, height);
   viewer::ImGuiSession session;
   viewer::NullPlatform platform(width, height);
-  viewer::ViewerApp app(*context, platform);
+  EngineModelServices services;
+  viewer::ViewerApp app(*context, platform, &services);
   load_inputs(app, o);
-  // ImGui lays windows out over the first frames (auto-sized tables, popups); draw a few.
-  for (int i = 0; i < o.warmup_frames; ++i) app.frame();
+  // ImGui lays windows out over the first frames (auto-sized tables, popups); draw a few, and
+  // wait for rollouts and traces so the picture shows their results.
+  for (int i = 0; i < o.warmup_frames || app.busy(); ++i) {
+    app.frame();
+    if (app.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   app.request_screenshot(o.screenshot);
   app.frame();
   if (!app.last_error().empty()) throw Error("view: " + app.last_error());
@@ -54,7 +92,8 @@ void run_window(const ViewOptions& o, int width, int height) {
   }
   viewer::ImGuiSession session;
   viewer::GlfwPlatform platform(*context);
-  viewer::ViewerApp app(*context, platform);
+  EngineModelServices services;
+  viewer::ViewerApp app(*context, platform, &services);
   // A bad file on the command line becomes the viewer's error popup, as it would from the UI.
   try {
     load_inputs(app, o);
@@ -71,9 +110,19 @@ void add_view_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "view",
       "Interactive viewer: timeline, U-Net level browser, point picking with its neighbourhood, "
-      "object table, contact timeline. With --screenshot the whole UI is rendered off-screen "
-      "(OSMesa, no display needed) to a PNG and the program exits.");
-  cmd->add_option("scene", o->scene_path, "Scene file (HDF5) to open");
+      "object table, contact timeline, rollouts (truth vs prediction, error over time), the "
+      "model's own levels and filter weights (--checkpoint, --trace), two checkpoints side by "
+      "side (--compare) and what-if edits of the initial state. With --screenshot the whole UI "
+      "is rendered off-screen (OSMesa, no display needed) to a PNG and the program exits.");
+  cmd->add_option("file", o->scene_path, "Scene, rollout or trace file (HDF5) to open");
+  cmd->add_option("--checkpoint", o->checkpoint,
+                  "Checkpoint whose traces drive the level browser and inspector; what-if and "
+                  "rollouts run it");
+  cmd->add_option("--compare", o->compare,
+                  "Second checkpoint: roll both out on the scene and show them side by side")
+      ->needs("--checkpoint");
+  cmd->add_option("--trace", o->trace_path,
+                  "Trace file (`dynscope trace`) for levels and inspector");
   cmd->add_option("--view", o->view_path, "View spec JSON (as saved by the viewer or render)");
   cmd->add_option("--screenshot", o->screenshot, "Render the UI headless to this PNG and exit");
   cmd->add_option("--size", o->size, "Window / screenshot size WxH (default 1280x800)");

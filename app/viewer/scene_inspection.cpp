@@ -14,7 +14,7 @@ namespace dynscope::app::viewer {
 namespace {
 
 void check_point(const render::SceneRenderData& data, int level_point) {
-  const int n = static_cast<int>(data.level_indices().size());
+  const int n = data.level_size();
   if (level_point < 0 || level_point >= n) {
     throw ValueError("picked_point", std::to_string(level_point) + " is outside the " +
                                          std::to_string(n) + " points of the level");
@@ -65,17 +65,22 @@ Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_p
   Neighborhood out;
   out.k = k;
   out.radius = data.level_radius();
-  auto collect = [&](const NeighborList& list, std::vector<NeighborEntry>& into) {
+  auto collect = [&](const NeighborList& list, const std::vector<double>& weights,
+                     std::vector<NeighborEntry>& into) {
     for (Eigen::Index j = 0; j < list.index.cols(); ++j) {
       const int32_t p = list.index(0, j);
       if (!list.mask(0, j) || p == level_point) continue;
+      const double w = static_cast<size_t>(j) < weights.size() ? weights[j] : -1.0;
       into.push_back(
-          {p, nb.object[p], (nb.positions.row(p) - nb.positions.row(level_point)).norm()});
+          {p, nb.object[p], (nb.positions.row(p) - nb.positions.row(level_point)).norm(), w});
     }
   };
   // Valid entries come sorted by distance already (NeighborList's contract).
-  collect(nb.same, out.object);
-  collect(nb.relational, out.relational);
+  collect(nb.same, nb.same_weight, out.object);
+  collect(nb.relational, nb.relational_weight, out.relational);
+  out.object_conv = nb.same_conv;
+  out.relational_conv = nb.relational_conv;
+  if (data.trace() != nullptr) out.k = static_cast<int>(nb.same.index.cols());
   return out;
 }
 
@@ -108,6 +113,34 @@ std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& 
     c.radius = level.radius;
     c.points = static_cast<int>(level.points.rows());
     for (int32_t id : level.object_ids) ++c.per_object[id];
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+PointInfo inspect_trace_point(const ModelTrace& trace, const Scene& scene, int level,
+                              int level_point) {
+  PointInfo info;
+  info.cloud_point = trace_level0_point(trace, level, level_point);  // checks level and point
+  const TraceLevel& l = trace.levels[static_cast<size_t>(level)];
+  info.level_point = level_point;
+  info.object_id = l.object_ids[static_cast<size_t>(level_point)];
+  const int object = scene.object_index(info.object_id);
+  if (object >= 0) info.object_name = scene.objects[static_cast<size_t>(object)].name;
+  info.position = l.points.row(level_point).transpose();
+  return info;
+}
+
+std::vector<LevelCount> trace_level_counts(const ModelTrace& trace) {
+  std::vector<LevelCount> out;
+  for (size_t i = 0; i < trace.levels.size(); ++i) {
+    const TraceLevel& l = trace.levels[i];
+    LevelCount c;
+    c.level = static_cast<int>(i);
+    c.voxel = l.voxel;
+    c.radius = l.radius;
+    c.points = static_cast<int>(l.points.rows());
+    for (int32_t id : l.object_ids) ++c.per_object[id];
     out.push_back(std::move(c));
   }
   return out;

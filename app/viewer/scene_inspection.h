@@ -9,6 +9,7 @@
 
 #include "engine/core/types.h"
 #include "engine/geometry/point_cloud.h"
+#include "engine/io/trace_file.h"
 #include "engine/scene/scene.h"
 #include "render/scene_adapter.h"
 
@@ -29,6 +30,12 @@ struct PointInfo {
 /// or frame out of range.
 PointInfo inspect_point(const render::SceneRenderData& data, int level_point, int frame);
 
+/// Point `level_point` of level `level` of a model trace (its frame): position, object, and the
+/// model point (level 0) it is, as cloud_point; no velocity (a trace holds one frame). Throws
+/// ValueError for a level or point the trace does not have.
+PointInfo inspect_trace_point(const ModelTrace& trace, const Scene& scene, int level,
+                              int level_point);
+
 /// World positions `[N_level,3]` of the level points at `frame` (throws ValueError for a bad
 /// frame).
 Points level_positions(const render::SceneRenderData& data, int frame);
@@ -38,16 +45,21 @@ struct NeighborEntry {
   int point = -1;  ///< Level point index.
   int32_t object_id = -1;
   double distance = 0.0;  ///< Scene units.
+  /// Model trace only: |h(p_k - p_0)| of the list's traced PointConv, -1 when not traced.
+  double weight = -1.0;
 };
 
 /// The picked point's neighbours as the model's convolutions see them at the shown level: the
 /// object kNN (same object, the point itself excluded) and relational neighbours (other objects
-/// within `radius`), both nearest first. Matches the edges SceneRenderData draws.
+/// within `radius`), both nearest first. Matches the edges SceneRenderData draws; with a model
+/// trace the lists, k and weights are the model's.
 struct Neighborhood {
   int k = 0;
   double radius = 0.0;
   std::vector<NeighborEntry> object;
   std::vector<NeighborEntry> relational;
+  /// Model trace only: module paths of the PointConvs whose filter weights are listed ("" none).
+  std::string object_conv, relational_conv;
 };
 
 /// Neighbourhood of `level_point` at `frame` with `k` neighbours and the data's level radius.
@@ -75,5 +87,8 @@ struct LevelCount {
 /// Builds the model's hierarchy (build_hierarchy with the scene's preset) over `cloud` at `frame`
 /// and counts its points per level and object. Throws ValueError for a bad frame or empty cloud.
 std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& cloud, int frame);
+
+/// The same counts for the levels a model trace recorded (the model's own hierarchy).
+std::vector<LevelCount> trace_level_counts(const ModelTrace& trace);
 
 }  // namespace dynscope::app::viewer

@@ -4,11 +4,16 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "app/viewer/background_job.h"
 #include "app/viewer/imgui_renderer.h"
+#include "app/viewer/initial_state_edit.h"
+#include "app/viewer/model_services.h"
 #include "app/viewer/platform.h"
+#include "app/viewer/rollout_document.h"
 #include "app/viewer/scene_inspection.h"
 #include "engine/scene/scene.h"
 #include "render/gl_context.h"
@@ -19,7 +24,7 @@
 namespace dynscope::app::viewer {
 
 /// Collapsible sections of the side panel.
-enum class Panel { kFiles, kDisplay, kObjects, kContacts, kLevels, kInspector };
+enum class Panel { kFiles, kDisplay, kRollout, kModel, kObjects, kContacts, kLevels, kInspector };
 
 /// Playback state of the timeline.
 struct Timeline {
@@ -30,14 +35,22 @@ struct Timeline {
 };
 
 /// A loaded scene and what is derived from it once (the GPU-facing SceneRenderData for the view's
-/// level, contact distances). A rollout would add its ComparisonSeries and error scalars beside
-/// the scene here, so panels and the viewport read both from one place.
+/// level, contact distances). A shown rollout lives beside it in a RolloutDocument.
 struct SceneDocument {
   std::string path;
   Scene scene;
   std::unique_ptr<render::SceneRenderData> data;
   std::vector<double> contact_distance;  ///< `[T]` target–zone minimum distance, or empty.
   std::map<int, std::vector<LevelCount>> level_counts;  ///< Model hierarchy per frame (cache).
+};
+
+/// What one viewport of the 3D view draws: `scene` seen by `camera` in pixel columns [x0, x1) of
+/// the window (side by side: two viewports share one camera, shifted to each one's centre).
+struct Viewport {
+  render::RenderScene scene;
+  render::Camera camera;
+  int x0 = 0, x1 = 0;
+  std::string caption;  ///< Drawn at the viewport's top ("" for none).
 };
 
 /// The viewer: owns the scene document, view spec (camera, layers, level, picked point), timeline
@@ -47,8 +60,9 @@ struct SceneDocument {
 class ViewerApp {
  public:
   /// Draws into `context` (made current) with input from `platform`; an ImGuiSession must exist.
+  /// `services` (may be null; must outlive the app) runs the model for rollouts and traces.
   /// Throws Error if GL setup fails.
-  ViewerApp(render::GlContext& context, Platform& platform);
+  ViewerApp(render::GlContext& context, Platform& platform, ModelServices* services = nullptr);
   ~ViewerApp();
   ViewerApp(const ViewerApp&) = delete;
   ViewerApp& operator=(const ViewerApp&) = delete;
@@ -56,8 +70,66 @@ class ViewerApp {
   /// Reads a scene file and shows it (frame 0, camera fitted unless the view fixes it). Throws
   /// IoError/FormatError/ValueError naming the file; the previous scene stays on failure.
   void open_scene(const std::string& path);
-  /// Shows `scene` (validated; throws ValueError) labelled `path`.
+  /// Shows `scene` (validated; throws ValueError) labelled `path`; closes any rollout.
   void set_scene(const Scene& scene, const std::string& path);
+  /// Opens a rollout, trace or scene file by its contents (open_rollout, open_trace, open_scene);
+  /// throws what they throw.
+  void open_file(const std::string& path);
+  /// Opens `path` (open_file) during the next frame, as the Files section's Open button does:
+  /// failures become the error popup.
+  void request_open(const std::string& path) { open_request_ = path; }
+  /// Reads a rollout file and shows it, with the scene it names (stored path, else next to the
+  /// rollout) for meshes and levels when that can be read. Throws IoError/FormatError/ValueError
+  /// naming the file; the previous document stays on failure.
+  void open_rollout(const std::string& path);
+  /// Shows `rollout` (validated; throws ValueError) labelled `label`; `scene` (may be null) is the
+  /// scene it started from. Any compared rollout is dropped.
+  void set_rollout(const Rollout& rollout, const std::string& label, const Scene* scene);
+  /// Shows `other` as the compared rollout (side by side or ghost); throws ValueError if it has
+  /// fewer frames than the shown rollout or none is shown.
+  void set_compared_rollout(const Rollout& other, const std::string& label);
+  bool has_rollout() const { return rollout_ != nullptr; }
+  /// The shown rollout; throws ValueError if none.
+  const RolloutDocument& rollout() const;
+  /// The compared rollout or null.
+  const RolloutDocument* compared_rollout() const { return compare_.get(); }
+  /// How the rollout is shown (refits the camera when the number of viewports changes).
+  void set_rollout_mode(RolloutMode mode);
+  RolloutMode rollout_mode() const { return rollout_mode_; }
+  /// Mean point error above which a frame counts as diverged (scene units).
+  void set_error_threshold(double threshold) { error_threshold_ = threshold; }
+  double error_threshold() const { return error_threshold_; }
+  /// Moves to the first frame whose mean point error exceeds the threshold; returns it, or -1
+  /// (frame unchanged) when none does or no rollout is shown.
+  int jump_to_error_threshold();
+  /// Frames of the timeline: the rollout's when one is shown, else the scene's (0 for none).
+  int num_frames() const;
+
+  /// Uses `checkpoint` (through the ModelServices) for the level browser and inspector: its trace
+  /// is captured in the background whenever frame, level or picked point change. "" stops.
+  /// Throws ValueError when the app has no ModelServices.
+  void set_checkpoint(const std::string& checkpoint);
+  const std::string& checkpoint() const { return checkpoint_; }
+  /// Reads a trace file (`dynscope trace`) and drives levels and inspector from it, at its frame;
+  /// the scene it names is opened when none is shown. Throws IoError/FormatError naming the file.
+  void open_trace(const std::string& path);
+  /// The model trace the panels show now (at the current frame and level), or null.
+  const ModelTrace* shown_trace() const;
+  /// Rolls the checkpoint (and `compare`, when not empty) out on the scene in the background and
+  /// shows the result(s) side by side. Throws ValueError without a scene, checkpoint or services.
+  void start_rollouts(const std::string& compare);
+  /// What-if: re-runs the checkpoint's rollout on the scene with `edit` applied
+  /// (apply_initial_state_edit at the rollout's observed frames) in the background, and shows the
+  /// new rollout against the original (which is rolled out first when none is shown). Throws
+  /// ValueError without a scene, checkpoint or services, or for a bad edit.
+  void start_what_if(const ObjectEdit& edit);
+  /// The level data panels and picking read: built from the shown model trace, else the scene's
+  /// preview levels; null without a scene.
+  const render::SceneRenderData* active_data() const;
+  /// True while a rollout or trace runs in the background.
+  bool busy() const { return rollout_job_ != nullptr || trace_job_ != nullptr; }
+  /// The viewports the 3D view draws for the current state (one, or two side by side).
+  std::vector<Viewport> viewports() const;
   /// Applies a view spec file (camera, layers, level, frame, picked point). Throws IoError or
   /// FormatError naming the file; the current view stays on failure.
   void open_view(const std::string& path);
@@ -81,7 +153,7 @@ class ViewerApp {
   void set_frame(int frame);
   /// Picks the level point at pixel (x, y) as a click would; returns whether a point was hit.
   bool pick(int x, int y);
-  /// Selected level point or -1.
+  /// Selected level point (of the trace's level when a model trace is shown) or -1.
   int selected_point() const { return view_.picked_point; }
   /// Selects level point `point` (-1 clears); throws ValueError if out of range.
   void select_point(int point);
@@ -103,12 +175,29 @@ class ViewerApp {
 
  private:
   void ensure_render_data();
+  void update_jobs();
+  void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked);
+  void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
+                         bool what_if);
+  render::ViewSpec rollout_view(bool prediction, bool truth, bool ghost) const;
+  void add_scene_layers(render::RenderScene& out) const;
+  int viewport_at(int x) const;
+  float timeline_height() const;
   void fit_camera();
   void handle_input();
   void advance_playback(float dt_s);
   void draw_panels();
   void draw_files_section();
   void draw_display_section();
+  void draw_rollout_section();
+  void draw_model_section();
+  void draw_colorbar(float lo, float hi);
+  void draw_error_strip();
+  void draw_rollout_contacts();
+  void draw_what_if();
+  void draw_trace_features(const ModelTrace& trace);
+  void draw_trace_mesh(const ModelTrace& trace);
+  void draw_viewport_captions(const std::vector<Viewport>& viewports);
   void draw_objects_section();
   void draw_contacts_section();
   void draw_levels_section();
@@ -121,9 +210,34 @@ class ViewerApp {
 
   render::GlContext& context_;
   Platform& platform_;
+  ModelServices* services_;
   render::Renderer renderer_;
   ImGuiRenderer imgui_;
   std::unique_ptr<SceneDocument> doc_;
+  std::unique_ptr<RolloutDocument> rollout_;
+  std::unique_ptr<RolloutDocument> compare_;
+  RolloutMode rollout_mode_ = RolloutMode::kGhost;
+  double error_threshold_ = 0.0;
+  // Model: checkpoint(s), the trace shown and the background work.
+  std::string checkpoint_;
+  std::string compare_field_;
+  std::shared_ptr<const ModelTrace> trace_;
+  bool trace_from_file_ = false;
+  int trace_level_ = -1, trace_picked_ = -1;             ///< What trace_ was captured for.
+  std::unique_ptr<render::SceneRenderData> trace_data_;  ///< Built from trace_ at trace_level_.
+  struct TraceRequest {
+    int frame = -1, level = -1, picked = -1;
+  };
+  TraceRequest trace_request_;  ///< What trace_job_ captures.
+  TraceRequest trace_failed_;   ///< Last request that failed (not retried until it changes).
+  std::unique_ptr<BackgroundJob<ModelTrace>> trace_job_;
+  std::unique_ptr<BackgroundJob<std::vector<Rollout>>> rollout_job_;
+  bool rollout_job_what_if_ = false;
+  std::optional<Scene> what_if_scene_;  ///< Edited scene of the running what-if.
+  ObjectEdit edit_;
+  int edit_object_ = -1;  ///< Object index the edit fields were filled from.
+  using ScissorFn = void (*)(GLint, GLint, GLsizei, GLsizei);
+  ScissorFn scissor_ = nullptr;  ///< glScissor (not in render's table) for side-by-side views.
   render::ViewSpec view_;
   int data_level_ = -1;  ///< Level doc_->data was built for.
   Timeline timeline_;
@@ -132,8 +246,10 @@ class ViewerApp {
   std::string error_;
   bool error_pending_ = false;
   std::string screenshot_path_;
+  std::string open_request_;
   // Text fields of the Files section.
   std::string scene_field_;
+  std::string checkpoint_field_;
   std::string view_field_ = "view.json";
   std::string screenshot_field_ = "screenshot.png";
   // Mouse drag in the 3D view: press position and whether it moved (a click picks).

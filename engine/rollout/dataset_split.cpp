@@ -12,8 +12,8 @@
 namespace dynscope {
 
 DatasetSplit read_dataset_split(const std::string& dir, const std::string& split) {
-  if (split != "train" && split != "val" && split != "test") {
-    throw ValueError("split", "unknown split '" + split + "' (train, val or test)");
+  if (split != "train" && split != "val" && split != "test" && split != "all") {
+    throw ValueError("split", "unknown split '" + split + "' (train, val, test or all)");
   }
   namespace fs = std::filesystem;
   const std::string path = (fs::path(dir) / "manifest.json").string();
@@ -42,9 +42,14 @@ DatasetSplit read_dataset_split(const std::string& dir, const std::string& split
         outcome[f.at("file").get<std::string>()] = f.value("outcome", -1);
       }
     }
-    for (const auto& f : m.at("split").at(split)) {
+    std::vector<std::string> files;
+    for (const char* name : {"train", "val", "test"}) {
+      if (split != "all" && split != name) continue;
+      for (const auto& f : m.at("split").at(name)) files.push_back(f.get<std::string>());
+    }
+    for (const std::string& f : files) {
       DatasetItem item;
-      item.file = f.get<std::string>();
+      item.file = f;
       item.path = (fs::path(dir) / item.file).string();
       const auto it = outcome.find(item.file);
       item.outcome = it == outcome.end() ? -1 : it->second;

@@ -5,6 +5,10 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "engine/io/rollout_file.h"
+#include "engine/io/scene_file.h"
+#include "engine/rollout/model_points.h"
+#include "engine/rollout/rollout_runner.h"
 #include "render/image.h"
 #include "render/png_io.h"
 #include "viewer_test_util.h"
@@ -65,6 +69,27 @@ TEST(ViewerGolden, LevelBrowser) {
   v.app.show_panel(Panel::kLevels);
   v.app.show_panel(Panel::kObjects);
   expect_matches_golden(settle(v), "viewer_levels");
+}
+
+TEST(ViewerGolden, RolloutSideBySide) {
+  // A constant-velocity rollout (torch-free) of the collide scene, written and reopened.
+  const Scene scene = read_scene(testing::collide_scene());
+  SamplingOptions sampling;
+  sampling.voxel = 0.1;
+  RolloutOptions options;
+  options.floor_clamp = true;
+  Rollout r = run_rollout(scene, build_model_points(scene, sampling),
+                          constant_velocity_predictor(9.81, scene.dt_s), options);
+  r.scene_path = testing::collide_scene();
+  r.sampling_voxel = sampling.voxel;
+  const fs::path file = fs::temp_directory_path() / "dynscope_viewer_golden_rollout.h5";
+  write_rollout(r, file.string());
+  testing::HeadlessViewer v;
+  v.app.open_rollout(file.string());
+  v.app.set_rollout_mode(RolloutMode::kSideBySide);
+  v.app.set_frame(40);
+  v.app.show_panel(Panel::kContacts);
+  expect_matches_golden(settle(v), "viewer_rollout");
 }
 
 }  // namespace

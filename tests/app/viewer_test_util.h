@@ -28,9 +28,11 @@ inline std::string collide_scene() {
   return std::string(DYNSCOPE_SOURCE_DIR) + "/assets/scenes/collide_0000.h5";
 }
 
-/// A headless viewer of kWidth x kHeight: ImGui session, null platform and the app.
+/// A headless viewer of kWidth x kHeight: ImGui session, null platform and the app (with
+/// `services`, which must outlive it, for the model).
 struct HeadlessViewer {
-  HeadlessViewer() : platform(kWidth, kHeight), app(osmesa(), platform) {}
+  explicit HeadlessViewer(ModelServices* services = nullptr)
+      : platform(kWidth, kHeight), app(osmesa(), platform, services) {}
   ImGuiSession session;
   NullPlatform platform;
   ViewerApp app;

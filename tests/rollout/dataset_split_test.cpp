@@ -33,6 +33,10 @@ TEST(DatasetSplitTest, ReadsFilesAndOutcomesOfOneSplit) {
   EXPECT_EQ(s.items[0].file, "b.h5");
   EXPECT_EQ(s.items[0].outcome, 0);
   EXPECT_TRUE(read_dataset_split(dir.string(), "val").items.empty());
+  const DatasetSplit all = read_dataset_split(dir.string(), "all");
+  ASSERT_EQ(all.items.size(), 2u) << "a held-out dataset is evaluated whole";
+  EXPECT_EQ(all.items[0].file, "a.h5");
+  EXPECT_EQ(all.items[1].outcome, 0);
 }
 
 TEST(DatasetSplitTest, BadInputsGiveClearErrors) {
