@@ -434,7 +434,59 @@ void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewS
   out.points.push_back(highlight);
 }
 
+void SceneRenderData::add_trace_interaction_points(RenderScene& out, int frame) const {
+  check_trace_frame(frame);
+  const TraceMesh& mesh = trace_->mesh;
+  const Points& vertices = trace_->levels.front().points;
+  const TraceList* senders = nullptr;
+  for (const TraceList& l : mesh.lists) {
+    if (l.name == "senders") senders = &l;
+  }
+  if (mesh.points.rows() == 0) return;
+  LineSet pairs, faces;
+  pairs.name = "interaction pairs";
+  pairs.width = 2.0f;
+  faces.name = "interaction faces";
+  faces.width = 1.5f;
+  std::vector<uint8_t> role(static_cast<size_t>(mesh.points.rows()), 0);  // 1 sender, 2 receiver
+  const auto point = [&](int32_t i) -> Vec3 { return mesh.points.row(i).transpose(); };
+  for (Eigen::Index r = 0; senders && r < senders->index.rows(); ++r) {
+    for (Eigen::Index k = 0; k < senders->index.cols(); ++k) {
+      if (!senders->mask(r, k)) continue;
+      const int32_t from = senders->index(r, k);
+      pairs.add(point(from), point(static_cast<int32_t>(r)), kInteractionColor);
+      role[static_cast<size_t>(from)] |= 1;
+      role[static_cast<size_t>(r)] |= 2;
+    }
+  }
+  // Outline the face under each paired point: senders orange, receivers green.
+  std::set<std::pair<int32_t, uint8_t>> drawn;
+  for (Eigen::Index i = 0; i < mesh.points.rows(); ++i) {
+    const int32_t f = mesh.face[static_cast<size_t>(i)];
+    const uint8_t r = role[static_cast<size_t>(i)];
+    if (r == 0 || f < 0 || f >= mesh.faces.rows() || !drawn.emplace(f, r).second) continue;
+    const Color c = (r & 2) ? kInteractionColor : kRelationEdgeColor;
+    for (int e = 0; e < 3; ++e) {
+      faces.add(vertices.row(mesh.faces(f, e)).transpose(),
+                vertices.row(mesh.faces(f, (e + 1) % 3)).transpose(), c);
+    }
+  }
+  out.lines.push_back(std::move(pairs));
+  out.lines.push_back(std::move(faces));
+  PointLayer layer;
+  layer.name = "interaction points";
+  layer.series = make_point_series({mesh.points});
+  layer.color = kInteractionColor;
+  layer.radius = 0.6f * point_radius_;
+  layer.pickable = false;
+  out.points.push_back(layer);
+}
+
 void SceneRenderData::add_interaction_points(RenderScene& out, int frame) const {
+  if (trace_ && trace_->has_mesh) {
+    add_trace_interaction_points(out, frame);
+    return;
+  }
   Points vertices(0, 3);
   Faces faces(0, 3);
   std::vector<int32_t> face_object;
@@ -492,7 +544,11 @@ std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
       if (level_ > 0) lines.push_back("purple: pooled from level below; teal: fed when upsampling");
     }
   }
-  if (l.interaction_points) lines.push_back("interaction points (green)");
+  if (l.interaction_points) {
+    lines.push_back(trace_ && trace_->has_mesh
+                        ? "model interaction points: pairs and receiver faces green, senders orange"
+                        : "interaction points (green)");
+  }
   return lines;
 }
 

@@ -87,7 +87,10 @@ class SceneRenderData {
 
  private:
   void add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const;
+  /// Interaction points: the model's (sender → receiver pairs and their faces) from a mesh
+  /// trace at its frame, else found between the scene's meshes at the view radius.
   void add_interaction_points(RenderScene& out, int frame) const;
+  void add_trace_interaction_points(RenderScene& out, int frame) const;
 
   void check_trace_frame(int frame) const;
 

@@ -180,6 +180,39 @@ TEST(SceneAdapter, TraceGivesTheModelsLevelsListsAndFilterWeights) {
   EXPECT_THROW(SceneRenderData(scene, view, trace), ValueError);
 }
 
+TEST(SceneAdapter, MeshTraceDrawsTheModelsInteractionPairsAndFaces) {
+  const Scene scene = testing::shapes_scene(3);
+  ModelTrace t = two_level_trace(1);
+  t.has_mesh = true;
+  t.mesh.faces.resize(2, 3);
+  t.mesh.faces << 0, 1, 2, 3, 2, 1;
+  t.mesh.points.resize(2, 3);
+  t.mesh.points << 0.2, 0.3, 0.0, 0.5, 0.3, 0.05;
+  t.mesh.face = {0, 1};
+  t.mesh.object_ids = {0, 1};
+  TraceList senders{"senders", -1, -1, IndexMatrix(2, 1), MaskMatrix(2, 1)};
+  senders.index << 1, -1;  // point 1 sends to point 0
+  senders.mask << 1, 0;
+  t.mesh.lists.push_back(senders);
+  ViewSpec view;
+  view.layers.interaction_points = true;
+  SceneRenderData data(scene, view, std::make_shared<const ModelTrace>(t));
+  const RenderScene frame = data.frame(1, view);
+  const LineSet* pairs = nullptr;
+  const LineSet* faces = nullptr;
+  for (const LineSet& l : frame.lines) {
+    if (l.name == "interaction pairs") pairs = &l;
+    if (l.name == "interaction faces") faces = &l;
+  }
+  ASSERT_NE(pairs, nullptr);
+  ASSERT_NE(faces, nullptr);
+  ASSERT_EQ(pairs->positions.size(), 6u) << "one sender -> receiver segment";
+  EXPECT_NEAR(pairs->positions[0], 0.5f, 1e-6f);  // from the sender
+  EXPECT_NEAR(pairs->positions[3], 0.2f, 1e-6f);  // to the receiver
+  EXPECT_EQ(faces->positions.size(), 2u * 3u * 6u) << "both faces outlined";
+  EXPECT_THROW(data.frame(2, view), ValueError) << "the trace holds frame 1 only";
+}
+
 TEST(SceneAdapter, ComparisonCarriesPerPointErrors) {
   Points truth(2, 3), pred(2, 3);
   truth << 0, 0, 0, 1, 0, 0;
