@@ -280,29 +280,6 @@ BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions
   return render_frames(context, options, view, source);
 }
 
-// The scene a rollout started from, for its meshes: the stored path as given, else next to the
-// rollout file. Empty optional (with the reason in `why`) when neither can be read.
-std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& rollout_path,
-                                   std::string* why) {
-  std::vector<std::string> candidates = {rollout.scene_path};
-  if (!rollout.scene_path.empty()) {
-    candidates.push_back(
-        (fs::path(rollout_path).parent_path() / fs::path(rollout.scene_path).filename()).string());
-  }
-  for (const std::string& c : candidates) {
-    if (c.empty() || !fs::is_regular_file(c)) continue;
-    try {
-      return read_scene(c);
-    } catch (const Error& e) {
-      *why = e.what();
-      return std::nullopt;
-    }
-  }
-  *why = rollout.scene_path.empty() ? "the rollout names no scene file"
-                                    : "scene file " + rollout.scene_path + " not found";
-  return std::nullopt;
-}
-
 ViewLayers default_rollout_layers() {
   ViewLayers l;
   l.grid = true;
@@ -316,36 +293,42 @@ ViewLayers default_rollout_layers() {
 
 BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptions& options) {
   require_out_dir(options);
-  const Rollout rollout = read_rollout(options.scene_path);
+  Rollout rollout = read_rollout(options.scene_path);
   ViewSpec view = resolve_view(options, default_rollout_layers());
   view.layers = effective_rollout_layers(view.layers);
-  const ComparisonSeries series =
-      make_comparison_series(rollout.truth, rollout.predicted, rollout.object_ids);
-  const int num_frames = rollout.num_frames();
-
+  const ViewLayers& l = view.layers;
+  // Meshes come from the scene the rollout started from, when it can be found.
+  std::optional<Scene> scene;
+  std::string mesh_note;
+  if (l.meshes) {
+    const std::string scene_path = find_rollout_scene(rollout, options.scene_path);
+    if (scene_path.empty()) {
+      mesh_note = rollout.scene_path.empty() ? "the rollout names no scene file"
+                                             : "scene file " + rollout.scene_path + " not found";
+    } else {
+      try {
+        scene = read_scene(scene_path);
+      } catch (const Error& e) {
+        mesh_note = e.what();
+      }
+    }
+  }
+  const RolloutRenderData data = make_rollout_render_data(
+      std::move(rollout), scene ? &*scene : nullptr, view.point_radius);
+  const int num_frames = data.num_frames();
   auto bounds = [&](int first, int last) {
     Aabb box;
     for (int f = std::max(0, first); f <= std::min(last, num_frames - 1); ++f) {
-      box.extend(series.truth->bounds(f));
-      box.extend(series.prediction->bounds(f));
+      box.extend(data.series.truth->bounds(f));
+      box.extend(data.series.prediction->bounds(f));
     }
     return box;
   };
-  const Aabb all = bounds(0, num_frames - 1);
-  const GroundGrid grid = grid_for_bounds(all);
-  // Points a third of the sampling voxel apart would overlap; without a voxel, scale by extent.
-  float radius = view.point_radius;
-  if (radius <= 0.0f) {
-    const double extent = all.empty() ? 1.0 : (all.max - all.min).norm();
-    radius = static_cast<float>(rollout.sampling_voxel > 0 ? 0.3 * rollout.sampling_voxel
-                                                           : 0.01 * std::max(extent, 1e-3));
-  }
-  const ViewLayers& l = view.layers;
   std::vector<std::string> legend;
   if (l.prediction) {
     char text[96];
     const float lo = view.auto_range ? 0.0f : view.range_min;
-    const float hi = view.auto_range ? std::max(series.max_error, 1e-6f) : view.range_max;
+    const float hi = view.auto_range ? std::max(data.max_error(), 1e-6f) : view.range_max;
     std::snprintf(text, sizeof(text), "prediction: error %.3g .. %.3g (%s)", lo, hi,
                   view.colormap.c_str());
     legend.push_back(text);
@@ -353,69 +336,32 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
   if (l.ghost && l.prediction) legend.push_back("truth: translucent");
   if (l.ground_truth && !l.prediction) legend.push_back("truth");
   if (l.ghost && l.ground_truth && !l.prediction) legend.push_back("prediction: translucent");
-
-  // Meshes follow the shown point set: the fitted predicted poses, or the truth's.
-  std::string mesh_note;
-  std::optional<Scene> scene;
-  std::vector<std::shared_ptr<MeshGeometry>> geometry(static_cast<size_t>(rollout.num_objects()));
-  if (l.meshes) {
-    scene = rollout_scene(rollout, options.scene_path, &mesh_note);
-    for (int i = 0; scene && i < rollout.num_objects(); ++i) {
-      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
-      const bool rigid = rollout.pose_rigid[static_cast<size_t>(i)] != 0;
-      if (index < 0 || !rigid || scene->objects[static_cast<size_t>(index)].mesh.empty()) continue;
-      geometry[static_cast<size_t>(i)] =
-          make_mesh_geometry(scene->objects[static_cast<size_t>(index)].mesh);
-    }
-    if (scene) legend.push_back(l.prediction ? "meshes: predicted poses" : "meshes: true poses");
+  if (l.meshes && data.scene) {
+    legend.push_back(l.prediction ? "meshes: predicted poses" : "meshes: true poses");
   }
-  auto add_meshes = [&](RenderScene& out, int f, const ViewSpec& v) {
-    if (!v.layers.meshes || !scene) return;
-    for (int i = 0; i < rollout.num_objects(); ++i) {
-      if (!geometry[static_cast<size_t>(i)]) continue;
-      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
-      const Object& o = scene->objects[static_cast<size_t>(index)];
-      MeshInstance m;
-      m.name = o.name;
-      m.geometry = geometry[static_cast<size_t>(i)];
-      m.color = o.color.cast<float>();
-      m.opacity = 0.3f;  // the error-coloured points on the surface stay visible
-      m.smooth = true;
-      const Pose& pose =
-          v.layers.prediction
-              ? rollout.poses[static_cast<size_t>(f)][static_cast<size_t>(i)]
-              : scene->trajectories[static_cast<size_t>(index)].poses[static_cast<size_t>(f)];
-      m.model = pose_matrix(pose, o.scale);  // rest coordinates carry the scale
-      out.meshes.push_back(std::move(m));
-    }
-  };
 
   FrameSource source;
   source.path = options.scene_path;
   source.num_frames = num_frames;
-  source.dt_s = rollout.dt_s;
+  source.dt_s = data.rollout.dt_s;
   source.bounds = bounds;
-  source.frame = [&](int f, const ViewSpec& v) {
-    RenderScene out;
-    out.background = v.background;
-    out.grid = grid;
-    out.grid.visible = v.layers.grid;
-    add_meshes(out, f, v);
-    add_comparison_layers(out, series, f, v, radius);
-    return out;
-  };
+  source.frame = [&](int f, const ViewSpec& v) { return rollout_frame(data, f, v); };
   source.caption = [&](int f) {
     char text[128];
     std::snprintf(text, sizeof(text), "%s %s  mean error %.4g",
                   frame_caption(f, num_frames).c_str(),
-                  f < rollout.observed_frames ? "observed" : "predicted",
-                  rollout.point_error[static_cast<size_t>(f)]);
+                  f < data.rollout.observed_frames ? "observed" : "predicted",
+                  data.rollout.point_error[static_cast<size_t>(f)]);
     std::vector<std::string> lines = {text};
     lines.insert(lines.end(), legend.begin(), legend.end());
     return lines;
   };
   BatchRenderResult result = render_frames(context, options, view, source);
-  if (l.meshes && !scene) result.notes.push_back("meshes skipped: " + mesh_note);
+  if (l.meshes && !data.scene) {
+    result.notes.push_back("meshes skipped: " +
+                           (mesh_note.empty() ? "the scene has fewer frames than the rollout"
+                                              : mesh_note));
+  }
   return result;
 }
 

@@ -623,4 +623,72 @@ void add_comparison_layers(RenderScene& out, const ComparisonSeries& series, int
   }
 }
 
+RolloutRenderData make_rollout_render_data(Rollout rollout, const Scene* scene,
+                                           float point_radius) {
+  rollout.validate();
+  if (rollout.num_frames() == 0) throw ValueError("rollout", "the rollout has no frames");
+  RolloutRenderData d;
+  d.series = make_comparison_series(rollout.truth, rollout.predicted, rollout.object_ids);
+  for (int f = 0; f < rollout.num_frames(); ++f) {
+    d.bounds.extend(d.series.truth->bounds(f));
+    d.bounds.extend(d.series.prediction->bounds(f));
+  }
+  d.grid = grid_for_bounds(d.bounds);
+  // Points a third of the sampling voxel apart would overlap; without a voxel, scale by extent.
+  const double extent = d.bounds.empty() ? 1.0 : (d.bounds.max - d.bounds.min).norm();
+  d.point_radius =
+      point_radius > 0.0f
+          ? point_radius
+          : static_cast<float>(rollout.sampling_voxel > 0 ? 0.3 * rollout.sampling_voxel
+                                                          : 0.01 * std::max(extent, 1e-3));
+  d.geometry.resize(static_cast<size_t>(rollout.num_objects()));
+  if (scene != nullptr && scene->num_frames() >= rollout.num_frames()) {
+    d.scene = *scene;
+    for (int i = 0; i < rollout.num_objects(); ++i) {
+      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
+      if (index < 0 || rollout.pose_rigid[static_cast<size_t>(i)] == 0 ||
+          scene->objects[static_cast<size_t>(index)].mesh.empty()) {
+        continue;
+      }
+      d.geometry[static_cast<size_t>(i)] =
+          make_mesh_geometry(scene->objects[static_cast<size_t>(index)].mesh);
+    }
+  }
+  d.rollout = std::move(rollout);
+  return d;
+}
+
+RenderScene rollout_frame(const RolloutRenderData& data, int frame, const ViewSpec& view) {
+  if (frame < 0 || frame >= data.num_frames()) {
+    throw ValueError("frame", std::to_string(frame) + " is outside the rollout's " +
+                                  std::to_string(data.num_frames()) + " frames");
+  }
+  RenderScene out;
+  out.background = view.background;
+  out.grid = data.grid;
+  out.grid.visible = view.layers.grid;
+  if (view.layers.meshes && data.scene) {
+    const Rollout& r = data.rollout;
+    for (int i = 0; i < r.num_objects(); ++i) {
+      if (!data.geometry[static_cast<size_t>(i)]) continue;
+      const int index = data.scene->object_index(r.pose_object_ids[static_cast<size_t>(i)]);
+      const Object& o = data.scene->objects[static_cast<size_t>(index)];
+      MeshInstance m;
+      m.name = o.name;
+      m.geometry = data.geometry[static_cast<size_t>(i)];
+      m.color = o.color.cast<float>();
+      m.opacity = 0.3f;  // the points on the surface stay visible
+      m.smooth = true;
+      const Pose& pose = view.layers.prediction
+                             ? r.poses[static_cast<size_t>(frame)][static_cast<size_t>(i)]
+                             : data.scene->trajectories[static_cast<size_t>(index)]
+                                   .poses[static_cast<size_t>(frame)];
+      m.model = pose_matrix(pose, o.scale);  // rest coordinates carry the scale
+      out.meshes.push_back(std::move(m));
+    }
+  }
+  add_comparison_layers(out, data.series, frame, view, data.point_radius);
+  return out;
+}
+
 }  // namespace dynscope::render

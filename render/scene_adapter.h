@@ -3,12 +3,14 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/io/trace_file.h"
+#include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
 #include "render/render_scene.h"
 #include "render/view_spec.h"
@@ -121,6 +123,36 @@ struct ComparisonSeries {
 ComparisonSeries make_comparison_series(const std::vector<Points>& truth,
                                         const std::vector<Points>& predicted,
                                         const std::vector<int32_t>& object_ids);
+
+/// A rollout with what is derived from it once to draw any frame (the rollout's SceneRenderData):
+/// the truth/prediction series (uploaded once, so scrubbing re-uploads nothing), mesh geometry
+/// of its rigid objects when the scene it started from is given, point radius, bounds and grid.
+/// Shared by `dynscope render` and the viewer.
+struct RolloutRenderData {
+  Rollout rollout;
+  ComparisonSeries series;
+  std::optional<Scene> scene;  ///< Scene the rollout started from (meshes, truth poses).
+  /// Per pose object (Rollout::pose_object_ids): its mesh, or null (no scene, not rigid, no mesh).
+  std::vector<std::shared_ptr<MeshGeometry>> geometry;
+  float point_radius = 0.01f;  ///< Sphere radius: 0.3 x sampling voxel (else 1% of the extent).
+  Aabb bounds;                 ///< Truth and prediction over all frames.
+  GroundGrid grid;
+
+  int num_frames() const { return rollout.num_frames(); }
+  /// Largest per-point error over all frames (scene units).
+  float max_error() const { return series.max_error; }
+};
+
+/// Validates `rollout` (throws ValueError, also for no frames) and prepares it. `scene` (may be
+/// null) gives meshes; one with fewer frames than the rollout is ignored. `point_radius` > 0
+/// overrides the default radius.
+RolloutRenderData make_rollout_render_data(Rollout rollout, const Scene* scene,
+                                           float point_radius = 0.0f);
+
+/// The RenderScene of `frame` as `view` asks: the grid, meshes at the predicted poses when
+/// view.layers.prediction (else the true poses), translucent so the points stay visible, and the
+/// point layers of add_comparison_layers. Throws ValueError for a frame outside the rollout.
+RenderScene rollout_frame(const RolloutRenderData& data, int frame, const ViewSpec& view);
 
 /// Appends the rollout's point layers for `frame` to `out` as `view.layers` asks: truth points,
 /// predicted points (categorical, or error through the colormap when `layers.error`), and a

@@ -33,67 +33,15 @@ const char* rollout_mode_name(RolloutMode mode) {
 
 std::unique_ptr<RolloutDocument> make_rollout_document(Rollout rollout, const std::string& path,
                                                        const Scene* scene) {
-  rollout.validate();
-  if (rollout.num_frames() == 0) throw ValueError("rollout", path + " has no frames");
   auto doc = std::make_unique<RolloutDocument>();
+  try {
+    static_cast<render::RolloutRenderData&>(*doc) =
+        render::make_rollout_render_data(std::move(rollout), scene);
+  } catch (const ValueError& e) {
+    throw ValueError("rollout", path + ": " + e.what());
+  }
   doc->path = path;
-  doc->series =
-      render::make_comparison_series(rollout.truth, rollout.predicted, rollout.object_ids);
-  for (int f = 0; f < rollout.num_frames(); ++f) {
-    doc->bounds.extend(doc->series.truth->bounds(f));
-    doc->bounds.extend(doc->series.prediction->bounds(f));
-  }
-  doc->grid = render::grid_for_bounds(doc->bounds);
-  // As `dynscope render`: a third of the sampling voxel, else 1% of the extent.
-  const double extent = doc->bounds.empty() ? 1.0 : (doc->bounds.max - doc->bounds.min).norm();
-  doc->point_radius = static_cast<float>(
-      rollout.sampling_voxel > 0 ? 0.3 * rollout.sampling_voxel : 0.01 * std::max(extent, 1e-3));
-  doc->geometry.resize(static_cast<size_t>(rollout.num_objects()));
-  if (scene != nullptr && scene->num_frames() >= rollout.num_frames()) {
-    doc->scene = *scene;
-    for (int i = 0; i < rollout.num_objects(); ++i) {
-      const int index = scene->object_index(rollout.pose_object_ids[static_cast<size_t>(i)]);
-      if (index < 0 || rollout.pose_rigid[static_cast<size_t>(i)] == 0 ||
-          scene->objects[static_cast<size_t>(index)].mesh.empty()) {
-        continue;
-      }
-      doc->geometry[static_cast<size_t>(i)] =
-          render::make_mesh_geometry(scene->objects[static_cast<size_t>(index)].mesh);
-    }
-  }
-  doc->rollout = std::move(rollout);
   return doc;
-}
-
-render::RenderScene rollout_frame(const RolloutDocument& doc, int frame,
-                                  const render::ViewSpec& view) {
-  check_frame(doc, frame);
-  render::RenderScene out;
-  out.background = view.background;
-  out.grid = doc.grid;
-  out.grid.visible = view.layers.grid;
-  if (view.layers.meshes && doc.scene) {
-    const Rollout& r = doc.rollout;
-    for (int i = 0; i < r.num_objects(); ++i) {
-      if (!doc.geometry[static_cast<size_t>(i)]) continue;
-      const int index = doc.scene->object_index(r.pose_object_ids[static_cast<size_t>(i)]);
-      const Object& o = doc.scene->objects[static_cast<size_t>(index)];
-      render::MeshInstance m;
-      m.name = o.name;
-      m.geometry = doc.geometry[static_cast<size_t>(i)];
-      m.color = o.color.cast<float>();
-      m.opacity = 0.3f;  // the points on the surface stay visible
-      m.smooth = true;
-      const Pose& pose = view.layers.prediction
-                             ? r.poses[static_cast<size_t>(frame)][static_cast<size_t>(i)]
-                             : doc.scene->trajectories[static_cast<size_t>(index)]
-                                   .poses[static_cast<size_t>(frame)];
-      m.model = render::pose_matrix(pose, o.scale);  // rest coordinates carry the scale
-      out.meshes.push_back(std::move(m));
-    }
-  }
-  render::add_comparison_layers(out, doc.series, frame, view, doc.point_radius);
-  return out;
 }
 
 void add_prediction_ghost(render::RenderScene& out, const RolloutDocument& other, int frame) {

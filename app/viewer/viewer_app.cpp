@@ -45,18 +45,12 @@ std::string file_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-// The scene a rollout started from: the stored path as given, else next to the rollout file;
-// empty when neither exists (a scene that exists but cannot be read throws, naming it).
+// The scene a rollout started from (render::find_rollout_scene), or none when it is not found;
+// a scene that exists but cannot be read throws, naming it.
 std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& rollout_path) {
-  namespace fs = std::filesystem;
-  if (rollout.scene_path.empty()) return std::nullopt;
-  for (const fs::path& c :
-       {fs::path(rollout.scene_path),
-        fs::path(rollout_path).parent_path() / fs::path(rollout.scene_path).filename()}) {
-    std::error_code ec;
-    if (fs::is_regular_file(c, ec)) return read_scene(c.string());
-  }
-  return std::nullopt;
+  const std::string path = find_rollout_scene(rollout, rollout_path);
+  if (path.empty()) return std::nullopt;
+  return read_scene(path);
 }
 
 }  // namespace
@@ -487,17 +481,17 @@ std::vector<Viewport> ViewerApp::viewports() const {
   const RolloutDocument& a = *rollout_;
   switch (rollout_mode_) {
     case RolloutMode::kPrediction:
-      out.push_back({rollout_frame(a, f, rollout_view(true, false, false)), camera, 0, w, ""});
+      out.push_back({render::rollout_frame(a, f, rollout_view(true, false, false)), camera, 0, w, ""});
       break;
     case RolloutMode::kTruth:
-      out.push_back({rollout_frame(a, f, rollout_view(false, true, false)), camera, 0, w, ""});
+      out.push_back({render::rollout_frame(a, f, rollout_view(false, true, false)), camera, 0, w, ""});
       break;
     case RolloutMode::kGhost:
       if (compare_) {
-        out.push_back({rollout_frame(a, f, rollout_view(true, false, false)), camera, 0, w, ""});
+        out.push_back({render::rollout_frame(a, f, rollout_view(true, false, false)), camera, 0, w, ""});
         add_prediction_ghost(out.back().scene, *compare_, f);
       } else {
-        out.push_back({rollout_frame(a, f, rollout_view(true, false, true)), camera, 0, w, ""});
+        out.push_back({render::rollout_frame(a, f, rollout_view(true, false, true)), camera, 0, w, ""});
       }
       break;
     case RolloutMode::kSideBySide: {
@@ -510,15 +504,15 @@ std::vector<Viewport> ViewerApp::viewports() const {
       lc.pan(quarter / h, 0.0);
       rc.pan(-quarter / h, 0.0);
       if (compare_) {
-        out.push_back({rollout_frame(*compare_, f, rollout_view(true, false, false)), lc, 0, split,
+        out.push_back({render::rollout_frame(*compare_, f, rollout_view(true, false, false)), lc, 0, split,
                        compare_->path});
         out.push_back(
-            {rollout_frame(a, f, rollout_view(true, false, false)), rc, split, w, a.path});
+            {render::rollout_frame(a, f, rollout_view(true, false, false)), rc, split, w, a.path});
       } else {
         out.push_back(
-            {rollout_frame(a, f, rollout_view(false, true, false)), lc, 0, split, "truth"});
+            {render::rollout_frame(a, f, rollout_view(false, true, false)), lc, 0, split, "truth"});
         out.push_back(
-            {rollout_frame(a, f, rollout_view(true, false, false)), rc, split, w, "prediction"});
+            {render::rollout_frame(a, f, rollout_view(true, false, false)), rc, split, w, "prediction"});
       }
       break;
     }

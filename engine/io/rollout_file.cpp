@@ -1,6 +1,7 @@
 // Rollout file writer and reader (layout in rollout_file.h).
 #include "engine/io/rollout_file.h"
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -219,6 +220,18 @@ bool is_rollout_file(const std::string& path) {
   } catch (const Error&) {
     return false;
   }
+}
+
+std::string find_rollout_scene(const Rollout& rollout, const std::string& rollout_path) {
+  namespace fs = std::filesystem;
+  if (rollout.scene_path.empty()) return "";
+  for (const fs::path& candidate :
+       {fs::path(rollout.scene_path),
+        fs::path(rollout_path).parent_path() / fs::path(rollout.scene_path).filename()}) {
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec)) return candidate.string();
+  }
+  return "";
 }
 
 }  // namespace dynscope

@@ -40,4 +40,8 @@ Rollout read_rollout(const std::string& path);
 /// True if `path` is an HDF5 file whose root "format" attribute is "dynscope-rollout".
 bool is_rollout_file(const std::string& path);
 
+/// The scene file `rollout` started from: its stored scene_path when that file exists, else the
+/// file of that name next to `rollout_path`; "" when neither exists (or no path is stored).
+std::string find_rollout_scene(const Rollout& rollout, const std::string& rollout_path);
+
 }  // namespace dynscope

@@ -96,6 +96,24 @@ TEST(RolloutFileTest, InconsistentRolloutIsNotWritten) {
   EXPECT_FALSE(fs::exists(path));
 }
 
+TEST(RolloutFileTest, FindsTheSceneAtItsPathOrNextToTheRollout) {
+  const fs::path dir = fs::temp_directory_path() / "dynscope_rollout_scene_lookup";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "moved");
+  Rollout r = make_rollout(false);
+  r.scene_path = (dir / "scene.h5").string();
+  EXPECT_EQ(find_rollout_scene(r, (dir / "moved" / "r.h5").string()), "") << "nothing exists yet";
+  std::ofstream(dir / "moved" / "scene.h5") << "x";
+  EXPECT_EQ(find_rollout_scene(r, (dir / "moved" / "r.h5").string()),
+            (dir / "moved" / "scene.h5").string());
+  std::ofstream(dir / "scene.h5") << "x";
+  EXPECT_EQ(find_rollout_scene(r, (dir / "moved" / "r.h5").string()), r.scene_path)
+      << "the stored path comes first";
+  r.scene_path.clear();
+  EXPECT_EQ(find_rollout_scene(r, (dir / "moved" / "r.h5").string()), "");
+  fs::remove_all(dir);
+}
+
 TEST(RolloutFileTest, CorruptFilesGiveClearErrors) {
   const std::string text = temp_path("text");
   std::ofstream(text) << "not hdf5";
