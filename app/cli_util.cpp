@@ -31,6 +31,14 @@ void require_readable_file(const std::string& path) {
   if (!in) throw IoError(path, "cannot be opened for reading");
 }
 
+DatasetSummary generate_with_progress(const DatasetOptions& options) {
+  check_dataset_options(options);
+  Progress progress("generate " + options.scenario, options.count);
+  const DatasetSummary summary = generate_dataset(options, &progress);
+  progress.finish();
+  return summary;
+}
+
 Rollout rollout_checkpoint(const std::string& checkpoint, const Scene& scene,
                            const std::string& scene_path, const RolloutOptions& options,
                            double voxel, Progress* progress, ModelPoints* points_out) {

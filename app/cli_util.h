@@ -9,6 +9,7 @@
 #include "engine/rollout/rollout_runner.h"
 #include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
+#include "engine/sim/dataset.h"
 
 namespace dynscope::app {
 
@@ -16,6 +17,10 @@ namespace dynscope::app {
 std::string format_aabb(const Aabb& box);
 /// Throws IoError if `path` does not exist or is not a regular readable file.
 void require_readable_file(const std::string& path);
+
+/// Checks `options` (before the first scene; the output directory is created), then generates
+/// the dataset with a progress bar. Throws what check_dataset_options / generate_dataset throw.
+DatasetSummary generate_with_progress(const DatasetOptions& options);
 
 /// Rolls `checkpoint` out on `scene` (read from `scene_path`), sampled as the checkpoint was
 /// trained unless `voxel` > 0, advancing `progress` once per predicted frame; the result names

@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
+#include "app/cli_util.h"
 #include "app/commands.h"
-#include "engine/core/progress.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/scenario.h"
 
@@ -28,11 +28,7 @@ std::string scenario_list() {
 }
 
 void run_generate(const DatasetOptions& options) {
-  // Every option is checked (and the output directory created) before the first scene.
-  check_dataset_options(options);
-  Progress progress("generate " + options.scenario, options.count);
-  const DatasetSummary summary = generate_dataset(options, &progress);
-  progress.finish();
+  const DatasetSummary summary = generate_with_progress(options);
   std::printf("wrote %lld %s scenes to %s (manifest %s)\n", static_cast<long long>(options.count),
               options.scenario.c_str(), options.out_dir.c_str(), summary.manifest_path.c_str());
   if (scenario_has_contact_label(options.scenario)) {

@@ -12,7 +12,6 @@
 #include "engine/rollout/evaluation.h"
 #include "engine/rollout/metrics.h"
 #include "engine/rollout/model_predictor.h"
-#include "engine/train/train_options.h"
 
 namespace dynscope::app {
 namespace {
@@ -28,7 +27,7 @@ struct RolloutArgs {
 };
 
 void run_rollout_command(const RolloutArgs& args) {
-  require_readable_file(args.checkpoint);
+  require_readable_file(args.checkpoint);  // before the progress bar starts
   require_readable_file(args.scene);
   set_torch_threads(args.threads);
   const Scene scene = read_scene(args.scene);

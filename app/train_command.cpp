@@ -14,8 +14,6 @@
 #include "app/cli_util.h"
 #include "app/commands.h"
 #include "engine/core/error.h"
-#include "engine/core/progress.h"
-#include "engine/sim/dataset.h"
 #include "engine/train/trainer.h"
 
 namespace dynscope::app {
@@ -103,12 +101,9 @@ void generate_missing_datasets(const TrainOptions& options) {
     g.seed = d.seed;
     g.out_dir = d.out;
     g.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    check_dataset_options(g);
     std::printf("generating %lld %s scenes (seed %llu) into %s\n", static_cast<long long>(g.count),
                 g.scenario.c_str(), static_cast<unsigned long long>(g.seed), g.out_dir.c_str());
-    Progress progress("generate " + g.scenario, g.count);
-    generate_dataset(g, &progress);
-    progress.finish();
+    generate_with_progress(g);
   }
 }
 

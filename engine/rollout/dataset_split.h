@@ -23,8 +23,8 @@ struct DatasetSplit {
 
 /// Reads DIR/manifest.json and returns the files of `split` ("all": every scene, in the order
 /// train, val, test; for a dataset generated apart as a held-out set). Throws
-/// ValueError("split", ...) for a split other than train/val/test/all, IoError if the manifest is missing or unreadable,
-/// FormatError naming the field for a malformed manifest or a listed file that does not exist.
+/// ValueError("split", ...) for a split other than train/val/test/all, IoError if the manifest
+/// is missing or unreadable, FormatError naming the field for a malformed manifest or a listed file that does not exist.
 DatasetSplit read_dataset_split(const std::string& dir, const std::string& split);
 
 }  // namespace dynscope

@@ -76,7 +76,9 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   EXPECT_EQ(traced.frame, 6);
   EXPECT_FALSE(traced.queries.empty()) << "the picked point's filter weights are traced";
   for (const TraceQuery& q : traced.queries) {
-    if (q.level == 1) EXPECT_EQ(q.query_index, 1) << q.conv;
+    if (q.level == 1) {
+      EXPECT_EQ(q.query_index, 1) << q.conv;
+    }
   }
   EXPECT_NE(run("render " + scene + " --checkpoint " + ckpt + " --level 1 --pick 100000"
                 " --no-video --out " + (frames / "d").string()),
