@@ -1,0 +1,43 @@
+// Compute-thread budget: one atomic count mirrored into OpenMP.
+#include "engine/core/threads.h"
+
+#include <omp.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+namespace {
+
+std::atomic<int> g_threads{0};  // 0: not set yet
+
+}  // namespace
+
+int default_compute_threads() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+int compute_threads() {
+  const int n = g_threads.load(std::memory_order_relaxed);
+  return n > 0 ? n : default_compute_threads();
+}
+
+void set_compute_threads(int threads) {
+  if (threads < 0 || threads > kMaxComputeThreads) {
+    throw ValueError("threads", "must be in [0, " + std::to_string(kMaxComputeThreads) +
+                                    "] (0: one per core), got " + std::to_string(threads));
+  }
+  const int n = threads == 0 ? default_compute_threads() : threads;
+  g_threads.store(n, std::memory_order_relaxed);
+  omp_set_num_threads(n);
+}
+
+}  // namespace dynscope
