@@ -10,6 +10,7 @@
 #include "engine/core/error.h"
 #include "engine/core/progress.h"
 #include "engine/rollout/evaluation.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
 

@@ -1,9 +1,12 @@
-// `dynscope info FILE`: describe a scene file or a mesh (objects, frames, bounds, point counts).
+// `dynscope info FILE | --system`: describe a scene, mesh, rollout, trace or checkpoint, or the
+// machine and process (BLAS, threads, LibTorch, GL).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <utility>
+#include <vector>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
@@ -14,7 +17,9 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/trace_file.h"
 #include "engine/model/checkpoint_info.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_points.h"
+#include "render/context_factory.h"
 
 namespace dynscope::app {
 namespace {
@@ -25,6 +30,7 @@ struct InfoOptions {
   double oversample = 8.0;
   uint64_t seed = 0;
   bool json = false;
+  bool system = false;
 };
 
 nlohmann::json aabb_json(const Aabb& box) {
@@ -258,7 +264,31 @@ bool starts_with_zip_signature(const std::string& path) {
   return in.gcount() == 4 && magic[0] == 'P' && magic[1] == 'K' && magic[2] == 3 && magic[3] == 4;
 }
 
+// `info --system`: what this process computes and draws with, as one key/value table.
+void print_system(const InfoOptions& opt) {
+  std::vector<std::pair<std::string, std::string>> lines = torch_context();
+  try {
+    lines.emplace_back("gl_headless", render::describe_backend("osmesa"));
+  } catch (const std::exception& e) {
+    lines.emplace_back("gl_headless", std::string("unavailable: ") + e.what());
+  }
+  if (opt.json) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [key, value] : lines) j[key] = value;
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  for (const auto& [key, value] : lines) {
+    std::printf("%-22s %s\n", key.c_str(), value.c_str());
+  }
+}
+
 void run_info(const InfoOptions& opt) {
+  if (opt.system) {
+    print_system(opt);
+    if (opt.file.empty()) return;
+  }
+  if (opt.file.empty()) throw ValueError("file", "give a FILE to describe, or --system");
   require_readable_file(opt.file);
   if (is_rollout_file(opt.file)) {
     print_rollout(opt.file, read_rollout(opt.file), opt);
@@ -288,8 +318,7 @@ void add_info_command(CLI::App& app) {
       "downsampling), a mesh (any format assimp reads), a rollout, a trace or a checkpoint.");
   cmd->add_option(
          "file", opt->file,
-         "Scene, rollout or trace (.h5), mesh (.obj, .ply, .stl, .glb, ...) or checkpoint file")
-      ->required();
+         "Scene, rollout or trace (.h5), mesh (.obj, .ply, .stl, .glb, ...) or checkpoint file");
   cmd->add_option("--voxel", opt->voxel,
                   "Grid downsampling voxel edge for the point counts (default: 0.2 for movi-* "
                   "scenes, 0.05 for other scenes, bounding-box diagonal / 50 for meshes)")
@@ -300,6 +329,10 @@ void add_info_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Surface sampling seed")->capture_default_str();
   cmd->add_flag("--json", opt->json, "Print machine-readable JSON instead of a table");
+  cmd->add_flag("--system", opt->system,
+                "Describe this machine and process instead: LibTorch version and CUDA, the BLAS "
+                "library actually mapped (warns on the reference BLAS), LibTorch/OpenMP/BLAS "
+                "thread counts, and the headless GL renderer");
   cmd->callback([opt] { run_info(*opt); });
 }
 

@@ -5,8 +5,12 @@
 
 #include "app/commands.h"
 #include "engine/core/log.h"
+#include "engine/model/torch_runtime.h"
 
 int main(int argc, char** argv) {
+  // One compute-thread budget for LibTorch, OpenBLAS and our loops unless a command's --threads
+  // asks for more (engine/core/threads.h says why the default is one thread).
+  dynscope::set_torch_threads(0);
   CLI::App app{
       "dynscope: a workbench for learned object dynamics (hierarchical PointConv U-Net).\n"
       "Generate ground truth, train and roll out models, and inspect scenes, rollouts and\n"

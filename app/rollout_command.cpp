@@ -11,6 +11,7 @@
 #include "engine/io/scene_file.h"
 #include "engine/rollout/evaluation.h"
 #include "engine/rollout/metrics.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 
 namespace dynscope::app {

@@ -18,4 +18,8 @@ std::vector<std::string> context_backends();
 std::unique_ptr<GlContext> create_context(const std::string& backend, int width, int height,
                                           bool visible = false);
 
+/// "GL <version> / <renderer>" of a 1x1 context of `backend` (e.g. "GL 4.5 (Core Profile) Mesa
+/// 22.3.6 / llvmpipe (LLVM 15.0.6, 256 bits)"). Throws as create_context.
+std::string describe_backend(const std::string& backend);
+
 }  // namespace dynscope::render

@@ -18,7 +18,7 @@ std::atomic<int> g_threads{0};  // 0: not set yet
 
 }  // namespace
 
-int default_compute_threads() {
+int available_cores() {
   cpu_set_t set;
   CPU_ZERO(&set);
   if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
@@ -27,15 +27,15 @@ int default_compute_threads() {
 
 int compute_threads() {
   const int n = g_threads.load(std::memory_order_relaxed);
-  return n > 0 ? n : default_compute_threads();
+  return n > 0 ? n : kDefaultComputeThreads;
 }
 
 void set_compute_threads(int threads) {
   if (threads < 0 || threads > kMaxComputeThreads) {
     throw ValueError("threads", "must be in [0, " + std::to_string(kMaxComputeThreads) +
-                                    "] (0: one per core), got " + std::to_string(threads));
+                                    "] (0: the default, 1), got " + std::to_string(threads));
   }
-  const int n = threads == 0 ? default_compute_threads() : threads;
+  const int n = threads == 0 ? kDefaultComputeThreads : threads;
   g_threads.store(n, std::memory_order_relaxed);
   omp_set_num_threads(n);
 }

@@ -8,12 +8,18 @@ namespace dynscope {
 /// OpenMP build of OpenBLAS share, so the process never runs more compute threads than this.
 int compute_threads();
 
-/// Sets the budget to `threads` (>= 1), or to default_compute_threads() for 0. Throws ValueError
+/// Sets the budget to `threads` (>= 1), or to kDefaultComputeThreads for 0. Throws ValueError
 /// for a negative count or one above kMaxComputeThreads.
 void set_compute_threads(int threads);
 
-/// The budget used when nothing was set: the cores this process may run on.
-int default_compute_threads();
+/// The cores this process may run on (its CPU affinity).
+int available_cores();
+
+/// The budget when nothing was set. One thread: at the sizes this project trains and rolls out,
+/// a second OpenMP thread gains little on a quiet machine and collapses (spin-waiting at every
+/// barrier) when another process keeps a core busy; a training run's prefetch thread or the
+/// viewer's UI thread then uses the second core. Ask for more with set_compute_threads.
+constexpr int kDefaultComputeThreads = 1;
 
 /// Upper bound of set_compute_threads (a larger count is a typing error, not a machine).
 constexpr int kMaxComputeThreads = 1024;

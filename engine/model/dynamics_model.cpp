@@ -3,6 +3,7 @@
 
 #include <torch/autograd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -39,6 +40,125 @@ ModelInput make_model_input(const PointState& state, const Hierarchy& hierarchy,
   in.prev_velocity = points_to_tensor(state.prev_velocity, device).to(torch::kFloat);
   in.hierarchy = to_tensors(hierarchy, device);
   return in;
+}
+
+namespace {
+
+// Lists of several inputs stacked row-wise; the sources of list b are shifted by offsets[b].
+NeighborTensors concat_lists(const std::vector<const NeighborTensors*>& lists,
+                             const std::vector<int64_t>& offsets) {
+  int64_t k = 0;
+  bool prepared = true;
+  for (const NeighborTensors* l : lists) {
+    k = std::max<int64_t>(k, l->index.size(1));
+    prepared = prepared && (l->rows() == 0 || l->rel.defined());
+  }
+  std::vector<torch::Tensor> index, mask, rel, count, has_any;
+  for (size_t b = 0; b < lists.size(); ++b) {
+    const NeighborTensors& l = *lists[b];
+    const int64_t pad = k - l.index.size(1);
+    torch::Tensor i = torch::where(l.mask, l.index + offsets[b], l.index);
+    index.push_back(torch::constant_pad_nd(i, {0, pad}, -1));
+    mask.push_back(torch::constant_pad_nd(l.mask, {0, pad}, 0));
+    if (prepared && l.rows() > 0) {
+      rel.push_back(torch::constant_pad_nd(l.rel, {0, 0, 0, pad}, 0));
+      count.push_back(l.count);
+      has_any.push_back(l.has_any);
+    }
+  }
+  NeighborTensors out;
+  out.index = torch::cat(index);
+  out.mask = torch::cat(mask);
+  if (prepared && !rel.empty()) {
+    out.rel = torch::cat(rel);
+    out.count = torch::cat(count);
+    out.has_any = torch::cat(has_any);
+  }
+  return out;
+}
+
+}  // namespace
+
+ModelInput concatenate_inputs(const std::vector<ModelInput>& inputs) {
+  if (inputs.empty()) throw ValueError("batch", "no inputs to concatenate");
+  if (inputs.size() == 1) return inputs.front();
+  const int levels = inputs.front().hierarchy.num_levels();
+  const bool mesh = levels > 0 && inputs.front().hierarchy.levels[0].has_mesh;
+  for (const ModelInput& in : inputs) {
+    if (in.hierarchy.num_levels() != levels ||
+        (levels > 0 && in.hierarchy.levels[0].has_mesh != mesh)) {
+      throw ValueError("batch", "inputs have different hierarchies (level count or mesh mode)");
+    }
+  }
+  auto gather = [&](auto&& field) {
+    std::vector<torch::Tensor> parts;
+    for (const ModelInput& in : inputs) parts.push_back(field(in));
+    return torch::cat(parts);
+  };
+  ModelInput out;
+  out.position = gather([](const ModelInput& in) { return in.position; });
+  out.velocity = gather([](const ModelInput& in) { return in.velocity; });
+  out.prev_velocity = gather([](const ModelInput& in) { return in.prev_velocity; });
+  // offsets[l][b]: first row of input b at level l.
+  const size_t n = inputs.size();
+  std::vector<std::vector<int64_t>> offsets(static_cast<size_t>(levels), std::vector<int64_t>(n));
+  std::vector<int64_t> mesh_offsets(n);
+  for (int l = 0; l < levels; ++l) {
+    int64_t at = 0;
+    for (size_t b = 0; b < n; ++b) {
+      offsets[static_cast<size_t>(l)][b] = at;
+      at += inputs[b].hierarchy.levels[static_cast<size_t>(l)].points.size(0);
+    }
+  }
+  for (size_t b = 0, at = 0; b < n && mesh; ++b) {
+    mesh_offsets[b] = static_cast<int64_t>(at);
+    at += static_cast<size_t>(inputs[b].hierarchy.levels[0].mesh.points.size(0));
+  }
+  out.hierarchy.levels.resize(static_cast<size_t>(levels));
+  for (int l = 0; l < levels; ++l) {
+    const auto li = static_cast<size_t>(l);
+    auto lists = [&](auto&& member) {
+      std::vector<const NeighborTensors*> v;
+      for (const ModelInput& in : inputs) v.push_back(&member(in.hierarchy.levels[li]));
+      return v;
+    };
+    LevelTensors& t = out.hierarchy.levels[li];
+    t.points = gather([&](const ModelInput& in) { return in.hierarchy.levels[li].points; });
+    t.radius = inputs.front().hierarchy.levels[li].radius;
+    t.same = concat_lists(
+        lists([](const LevelTensors& x) -> const NeighborTensors& { return x.same; }), offsets[li]);
+    t.relational = concat_lists(
+        lists([](const LevelTensors& x) -> const NeighborTensors& { return x.relational; }),
+        offsets[li]);
+    if (l > 0) {
+      t.down = concat_lists(
+          lists([](const LevelTensors& x) -> const NeighborTensors& { return x.down; }),
+          offsets[li - 1]);
+      t.up = concat_lists(
+          lists([](const LevelTensors& x) -> const NeighborTensors& { return x.up; }), offsets[li]);
+    }
+  }
+  if (mesh) {
+    LevelTensors& l0 = out.hierarchy.levels[0];
+    l0.has_mesh = true;
+    auto lists = [&](auto&& member) {
+      std::vector<const NeighborTensors*> v;
+      for (const ModelInput& in : inputs) v.push_back(&member(in.hierarchy.levels[0].mesh));
+      return v;
+    };
+    l0.mesh.points =
+        gather([](const ModelInput& in) { return in.hierarchy.levels[0].mesh.points; });
+    l0.mesh.face_vertices = concat_lists(
+        lists([](const MeshTensors& x) -> const NeighborTensors& { return x.face_vertices; }),
+        offsets[0]);
+    l0.mesh.senders = concat_lists(
+        lists([](const MeshTensors& x) -> const NeighborTensors& { return x.senders; }),
+        mesh_offsets);
+    l0.mesh.vertex_points = concat_lists(
+        lists([](const MeshTensors& x) -> const NeighborTensors& { return x.vertex_points; }),
+        mesh_offsets);
+  }
+  return out;
 }
 
 DynamicsModelImpl::DynamicsModelImpl(const ModelConfig& config) : config_(config) {

@@ -29,6 +29,13 @@ struct ModelInput {
 ModelInput make_model_input(const PointState& state, const Hierarchy& hierarchy,
                             const torch::Device& device = torch::kCPU);
 
+/// Concatenates inputs into one: the points of input b follow those of input b−1 on every level
+/// and every neighbour list is offset to match (lists are padded to the widest K with masked
+/// entries), so no list crosses inputs and one forward pass of the result equals separate passes
+/// of each (the network is per point: LayerNorm, never BatchNorm). Throws ValueError for no
+/// inputs or inputs whose level counts or mesh mode differ.
+ModelInput concatenate_inputs(const std::vector<ModelInput>& inputs);
+
 /// Predicts p̂(t+1) from a PointState. The network sees only normalised velocities, the normalised
 /// height z and relative positions, so a translation in x and y leaves its output unchanged.
 /// Target acc: p̂(t+1) = p(t) + v(t) + â; vel: p̂(t+1) = p(t) + v̂. Normalisation statistics are

@@ -57,46 +57,83 @@ Partition partition(int64_t rows) {
   return {std::max<int64_t>(1, std::min(threads, (rows + kGrain - 1) / kGrain)), rows};
 }
 
+// The inner loops run over the filter width J (c_mid); with J known at compile time (the default
+// 16, and 8) they become a few full vector operations. kJ = 0 reads J at run time.
+template <int kJ>
+struct Width {
+  int64_t j;
+  constexpr int64_t operator()() const { return kJ > 0 ? kJ : j; }
+};
+
+// acc[c·J + j] += x[c] · h[j] for c < n: the outer product of one neighbour, transposed so the
+// contiguous inner loop runs over J.
+template <typename T, int kJ>
+inline void add_outer(T* __restrict acc, const T* __restrict x, int64_t n, const T* __restrict h,
+                      Width<kJ> width) {
+  const int64_t jn = width();
+  for (int64_t c = 0; c < n; ++c) {
+    const T xc = x[c];
+    T* row = acc + c * jn;
+    for (int64_t jj = 0; jj < jn; ++jj) row[jj] += xc * h[jj];
+  }
+}
+
 // out[m, j·C' + c] = Σ_k h[m,k,j] x[m,k,c], x = [features[idx]; edge].
-template <typename T>
+template <typename T, int kJ>
 void aggregate_forward(const T* features, const T* edge, const T* h, const int64_t* index, T* out,
-                       int64_t m, int64_t k, int64_t c, int64_t p, int64_t j) {
-  const int64_t ct = c + p;
+                       int64_t m, int64_t k, int64_t c, int64_t p, Width<kJ> width) {
+  const int64_t ct = c + p, j = width();
   at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
-    std::vector<T> x(static_cast<size_t>(ct));
+    std::vector<T> acc(static_cast<size_t>(ct * j));
     for (int64_t q = begin; q < end; ++q) {
-      T* o = out + q * j * ct;
-      std::fill(o, o + j * ct, T(0));
+      std::fill(acc.begin(), acc.end(), T(0));
       for (int64_t n = 0; n < k; ++n) {
         const int64_t e = q * k + n;
         const int64_t src = index[e];
         if (src < 0) continue;
-        std::copy(features + src * c, features + (src + 1) * c, x.data());
-        std::copy(edge + e * p, edge + (e + 1) * p, x.data() + c);
         const T* hk = h + e * j;
-        for (int64_t jj = 0; jj < j; ++jj) {
-          const T a = hk[jj];
-          T* row = o + jj * ct;
-          for (int64_t cc = 0; cc < ct; ++cc) row[cc] += a * x[static_cast<size_t>(cc)];
-        }
+        add_outer(acc.data(), features + src * c, c, hk, width);
+        add_outer(acc.data() + c * j, edge + e * p, p, hk, width);
+      }
+      T* o = out + q * j * ct;
+      for (int64_t jj = 0; jj < j; ++jj) {
+        for (int64_t cc = 0; cc < ct; ++cc) o[jj * ct + cc] = acc[static_cast<size_t>(cc * j + jj)];
       }
     }
   });
 }
 
+// dh[j] = Σ_c g[c·J + j] x[c] over the transposed gradient row g, for one neighbour.
+template <typename T, int kJ>
+inline void add_filter_grad(T* __restrict dh, const T* __restrict gt, const T* __restrict x,
+                            int64_t n, Width<kJ> width) {
+  const int64_t jn = width();
+  for (int64_t c = 0; c < n; ++c) {
+    const T xc = x[c];
+    const T* row = gt + c * jn;
+    for (int64_t jj = 0; jj < jn; ++jj) dh[jj] += xc * row[jj];
+  }
+}
+
 // Gradients of aggregate_forward. d_features is scattered into one buffer per worker (`buffers`
 // `[parts,N,C]`) so no two threads write the same row; the caller sums them.
-template <typename T>
+template <typename T, int kJ>
 void aggregate_backward(const T* features, const T* edge, const T* h, const int64_t* index,
                         const T* grad, T* d_buffers, T* d_edge, T* d_h, int64_t n_src, int64_t m,
-                        int64_t k, int64_t c, int64_t p, int64_t j, const Partition& part) {
-  const int64_t ct = c + p;
+                        int64_t k, int64_t c, int64_t p, Width<kJ> width, const Partition& part) {
+  const int64_t ct = c + p, j = width();
   at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
-    std::vector<T> x(static_cast<size_t>(ct)), dx(static_cast<size_t>(ct));
+    std::vector<T> gt(static_cast<size_t>(ct * j)), dx(static_cast<size_t>(ct));
     for (int64_t w = first; w < last; ++w) {
       T* d_feat = d_buffers ? d_buffers + w * n_src * c : nullptr;
       for (int64_t q = part.begin(w); q < part.end(w); ++q) {
         const T* g = grad + q * j * ct;
+        if (d_h) {
+          for (int64_t jj = 0; jj < j; ++jj) {
+            for (int64_t cc = 0; cc < ct; ++cc)
+              gt[static_cast<size_t>(cc * j + jj)] = g[jj * ct + cc];
+          }
+        }
         for (int64_t n = 0; n < k; ++n) {
           const int64_t e = q * k + n;
           const int64_t src = index[e];
@@ -107,16 +144,13 @@ void aggregate_backward(const T* features, const T* edge, const T* h, const int6
           }
           const T* hk = h + e * j;
           if (d_h) {
-            std::copy(features + src * c, features + (src + 1) * c, x.data());
-            std::copy(edge + e * p, edge + (e + 1) * p, x.data() + c);
-            for (int64_t jj = 0; jj < j; ++jj) {
-              const T* row = g + jj * ct;
-              T s = 0;
-              for (int64_t cc = 0; cc < ct; ++cc) s += row[cc] * x[static_cast<size_t>(cc)];
-              d_h[e * j + jj] = s;
-            }
+            T* dh = d_h + e * j;
+            std::fill(dh, dh + j, T(0));
+            add_filter_grad(dh, gt.data(), features + src * c, c, width);
+            add_filter_grad(dh, gt.data() + c * j, edge + e * p, p, width);
           }
           if (d_feat || d_edge) {
+            // dx[c] = Σ_j h[j] g[j·C' + c]: axpy over the contiguous C' per filter channel.
             std::fill(dx.begin(), dx.end(), T(0));
             for (int64_t jj = 0; jj < j; ++jj) {
               const T a = hk[jj];
@@ -135,6 +169,14 @@ void aggregate_backward(const T* features, const T* edge, const T* h, const int6
   });
 }
 
+// Calls `f(Width<...>)` with J fixed at compile time where it is a common width.
+template <typename F>
+void with_width(int64_t j, F&& f) {
+  if (j == 16) return f(Width<16>{16});
+  if (j == 8) return f(Width<8>{8});
+  f(Width<0>{j});
+}
+
 struct AggregateFunction : torch::autograd::Function<AggregateFunction> {
   static torch::Tensor forward(AutogradContext* ctx, torch::Tensor features, torch::Tensor edge,
                                torch::Tensor h, torch::Tensor index) {
@@ -146,9 +188,11 @@ struct AggregateFunction : torch::autograd::Function<AggregateFunction> {
     const int64_t c = features.size(1), p = edge.size(2);
     torch::Tensor out = torch::empty({m, j * (c + p)}, features.options());
     AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "point_conv_aggregate", [&] {
-      aggregate_forward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
-                                  h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
-                                  out.data_ptr<scalar_t>(), m, k, c, p, j);
+      with_width(j, [&](auto width) {
+        aggregate_forward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
+                                    h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
+                                    out.data_ptr<scalar_t>(), m, k, c, p, width);
+      });
     });
     ctx->save_for_backward({features, edge, h, index});
     return out;
@@ -169,10 +213,12 @@ struct AggregateFunction : torch::autograd::Function<AggregateFunction> {
     if (want_h) d_h = torch::empty_like(h);
     AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "point_conv_aggregate_backward", [&] {
       auto ptr = [](torch::Tensor& t) { return t.defined() ? t.data_ptr<scalar_t>() : nullptr; };
-      aggregate_backward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
-                                   h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
-                                   grad.data_ptr<scalar_t>(), ptr(buffers), ptr(d_edge), ptr(d_h),
-                                   n_src, m, k, c, p, j, part);
+      with_width(j, [&](auto width) {
+        aggregate_backward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
+                                     h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
+                                     grad.data_ptr<scalar_t>(), ptr(buffers), ptr(d_edge), ptr(d_h),
+                                     n_src, m, k, c, p, width, part);
+      });
     });
     torch::Tensor d_features;
     if (want_feat) d_features = part.parts == 1 ? buffers[0] : buffers.sum(0);

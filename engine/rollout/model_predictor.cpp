@@ -2,7 +2,6 @@
 #include "engine/rollout/model_predictor.h"
 
 #include <c10/util/Exception.h>
-#include <torch/utils.h>
 
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
@@ -30,11 +29,6 @@ LoadedModel load_model(const std::string& checkpoint_path) {
     }
   };
   return out;
-}
-
-void set_torch_threads(int threads) {
-  if (threads < 0) throw ValueError("threads", "must be >= 0, got " + std::to_string(threads));
-  if (threads > 0) torch::set_num_threads(threads);
 }
 
 }  // namespace dynscope

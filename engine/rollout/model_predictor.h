@@ -22,8 +22,4 @@ struct LoadedModel {
 /// are rethrown as dynscope Error naming the file.
 LoadedModel load_model(const std::string& checkpoint_path);
 
-/// Sets LibTorch's intra-op thread count (`threads` >= 1; 0 leaves the default). Throws
-/// ValueError for a negative count.
-void set_torch_threads(int threads);
-
 }  // namespace dynscope

@@ -6,12 +6,18 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numeric>
+#include <thread>
+#include <utility>
 
 #include "engine/core/error.h"
 #include "engine/core/log.h"
@@ -21,6 +27,7 @@
 #include "engine/io/temp_file.h"
 #include "engine/model/checkpoint.h"
 #include "engine/rollout/dataset_split.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
 
@@ -90,20 +97,107 @@ Example make_example(const SceneData& d, int t, double noise_std, Rng* rng) {
   return e;
 }
 
-// Sum over points and components of the Huber loss in target-std units, and the point count.
-torch::Tensor example_loss(DynamicsModel& model, const Example& e, double delta) {
-  const ModelInput input = make_model_input(e.state, model->build_hierarchy(e.state));
-  const torch::Tensor predicted = model->predict_positions(input);
-  const torch::Tensor truth = points_to_tensor(e.next);
+// A batch ready for the network: its examples' inputs concatenated into one, their true p(t+1).
+struct PreparedBatch {
+  ModelInput input;
+  torch::Tensor truth;  // float64 [P,3]
+  int64_t points = 0;
+};
+
+// Builds every example's hierarchy and tensors. Reads only the model's configuration, so it may
+// run on another thread while the model trains.
+PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Example>& examples) {
+  std::vector<ModelInput> inputs;
+  std::vector<torch::Tensor> truths;
+  PreparedBatch b;
+  for (const Example& e : examples) {
+    inputs.push_back(make_model_input(e.state, model.build_hierarchy(e.state)));
+    truths.push_back(points_to_tensor(e.next));
+    b.points += e.state.size();
+  }
+  b.input = concatenate_inputs(inputs);
+  b.truth = torch::cat(truths);
+  return b;
+}
+
+// Sum over points and components of the Huber loss in target-std units, one forward pass for the
+// whole batch.
+torch::Tensor batch_loss(DynamicsModel& model, const PreparedBatch& b, double delta) {
+  const torch::Tensor predicted = model->predict_positions(b.input);
   // p̂ − p equals the target error; dividing by the target std makes delta scale-free.
   const NormStats stats = model->stats();
   const torch::Tensor std = torch::tensor(
       {stats.target_std.x(), stats.target_std.y(), stats.target_std.z()}, torch::kDouble);
-  const torch::Tensor err = ((predicted - truth) / std).to(torch::kFloat);
+  const torch::Tensor err = ((predicted - b.truth) / std).to(torch::kFloat);
   return torch::nn::functional::huber_loss(
       err, torch::zeros_like(err),
       torch::nn::functional::HuberLossFuncOptions().reduction(torch::kSum).delta(delta));
 }
+
+// Prepares the next batch on a thread of its own while the current step runs on this one.
+class BatchPrefetcher {
+ public:
+  BatchPrefetcher() : thread_([this] { loop(); }) {}
+  ~BatchPrefetcher() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  BatchPrefetcher(const BatchPrefetcher&) = delete;
+  BatchPrefetcher& operator=(const BatchPrefetcher&) = delete;
+
+  /// Starts `job`; the previous result must have been taken.
+  void start(std::function<PreparedBatch()> job) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      job_ = std::move(job);
+      ready_ = false;
+    }
+    wake_.notify_all();
+  }
+  /// Waits for the started job; rethrows what it threw.
+  PreparedBatch take() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    wake_.wait(lock, [this] { return ready_; });
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return std::move(result_);
+  }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      wake_.wait(lock, [this] { return stop_ || job_; });
+      if (stop_) return;
+      std::function<PreparedBatch()> job = std::move(job_);
+      job_ = nullptr;
+      lock.unlock();
+      PreparedBatch result;
+      std::exception_ptr error;
+      try {
+        result = job();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      result_ = std::move(result);
+      error_ = error;
+      ready_ = true;
+      wake_.notify_all();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::function<PreparedBatch()> job_;
+  PreparedBatch result_;
+  std::exception_ptr error_;
+  bool ready_ = false, stop_ = false;
+  std::thread thread_;
+};
 
 NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target) {
   NormStatsAccumulator acc(target);
@@ -244,8 +338,41 @@ TrainResult run(TrainOptions o, bool show_progress) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
 
-  std::vector<int64_t> order;
+  // The per-epoch shuffle of the draws: each training scene samples_per_scene times.
+  auto epoch_order = [&](int64_t epoch) {
+    std::vector<int64_t> order(static_cast<size_t>(draws));
+    for (int64_t i = 0; i < draws; ++i) order[static_cast<size_t>(i)] = i % n_train;
+    Rng shuffle(derive_seed(o.seed ^ kOrderStream, static_cast<uint64_t>(epoch)));
+    for (int64_t i = draws - 1; i > 0; --i) {
+      std::swap(order[static_cast<size_t>(i)],
+                order[static_cast<size_t>(shuffle.uniform_int(0, i))]);
+    }
+    return order;
+  };
+  // The examples of step s: its slice of the epoch order, each with a random frame and noise, all
+  // from seeds of (seed, epoch, s), so a resumed run draws exactly what an uninterrupted one does.
+  auto step_batch = [&train, &model, o, steps_per_epoch, draws](
+                        int64_t s, std::shared_ptr<const std::vector<int64_t>> order) {
+    Rng rng(derive_seed(o.seed ^ kStepStream, static_cast<uint64_t>(s)));
+    const int64_t first = (s % steps_per_epoch) * o.batch;
+    std::vector<Example> examples;
+    for (int64_t b = first; b < std::min(first + o.batch, draws); ++b) {
+      const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
+      const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
+      examples.push_back(make_example(d, t, o.noise_std, &rng));
+    }
+    return prepare_batch(*model, examples);
+  };
+  std::shared_ptr<const std::vector<int64_t>> order;
   int64_t order_epoch = -1;
+  auto order_for = [&](int64_t s) {
+    const int64_t epoch = s / steps_per_epoch;
+    if (epoch != order_epoch) {
+      order = std::make_shared<const std::vector<int64_t>>(epoch_order(epoch));
+      order_epoch = epoch;
+    }
+    return order;
+  };
   double epoch_loss = 0.0;
   int64_t epoch_steps = 0;
   auto save = [&] {
@@ -253,33 +380,20 @@ TrainResult run(TrainOptions o, bool show_progress) {
     save_state(train_state_path(o.out), optimizer, step, config_json);
   };
 
+  BatchPrefetcher prefetch;
+  if (step < total) {
+    prefetch.start([&step_batch, s = step, ord = order_for(step)] { return step_batch(s, ord); });
+  }
   while (step < total) {
-    const int64_t epoch = step / steps_per_epoch;
-    if (epoch != order_epoch) {
-      order.resize(static_cast<size_t>(draws));
-      for (int64_t i = 0; i < draws; ++i) order[static_cast<size_t>(i)] = i % n_train;
-      Rng shuffle(derive_seed(o.seed ^ kOrderStream, static_cast<uint64_t>(epoch)));
-      for (int64_t i = draws - 1; i > 0; --i) {
-        std::swap(order[static_cast<size_t>(i)],
-                  order[static_cast<size_t>(shuffle.uniform_int(0, i))]);
-      }
-      order_epoch = epoch;
+    const PreparedBatch batch = prefetch.take();
+    if (step + 1 < total) {
+      prefetch.start(
+          [&step_batch, s = step + 1, ord = order_for(step + 1)] { return step_batch(s, ord); });
     }
-    Rng rng(derive_seed(o.seed ^ kStepStream, static_cast<uint64_t>(step)));
-    const int64_t first = (step % steps_per_epoch) * o.batch;
-    std::vector<Example> batch;
-    for (int64_t b = first; b < std::min(first + o.batch, draws); ++b) {
-      const SceneData& d = train[static_cast<size_t>(order[static_cast<size_t>(b)])];
-      const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
-      batch.push_back(make_example(d, t, o.noise_std, &rng));
-    }
-    int64_t points = 0;
-    for (const Example& e : batch) points += e.state.size();
     model->train();
     optimizer.zero_grad();
-    torch::Tensor loss = torch::zeros({}, torch::kFloat);
-    for (const Example& e : batch) loss = loss + example_loss(model, e, o.huber_delta);
-    loss = loss / static_cast<double>(points * 3);
+    torch::Tensor loss =
+        batch_loss(model, batch, o.huber_delta) / static_cast<double>(batch.points * 3);
     loss.backward();
     optimizer.step();
     ++step;
@@ -310,7 +424,7 @@ TrainResult run(TrainOptions o, bool show_progress) {
           const int t = static_cast<int>(d.frames.size()) / 2;
           const Example e = make_example(
               d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), 0.0, nullptr);
-          sum += example_loss(model, e, o.huber_delta).item<double>();
+          sum += batch_loss(model, prepare_batch(*model, {e}), o.huber_delta).item<double>();
           n += e.state.size() * 3;
           RolloutOptions ro;
           ro.observed_frames = 3;

@@ -1,22 +1,39 @@
 // Model speed: one rollout step split into neighbour search (hierarchy), network and pose fitting,
-// for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat).
+// for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the fused ops and
+// on the unfused reference formulation in the same run; training steps of the default movi-a
+// recipe model on a bundled scene; peak memory of training on 10k points.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/torch.h>
 
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "engine/core/rng.h"
 #include "engine/geometry/kabsch.h"
+#include "engine/io/scene_file.h"
+#include "engine/model/conv_implementation.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/model/dynamics_model.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
+#include "engine/train/train_options.h"
 
 namespace dynscope {
 namespace {
 
 constexpr int kObjects = 8;
+
+// Threads of the inference rows: 2 (the machine's cores) unless DYNSCOPE_BENCH_THREADS says
+// otherwise, e.g. 1 to measure on a machine whose other core is busy.
+int bench_threads() {
+  const char* env = std::getenv("DYNSCOPE_BENCH_THREADS");
+  return env ? std::max(1, std::atoi(env)) : 2;
+}
 
 // Points on the surfaces of kObjects unit spheres resting in a row (Physion-like spacing), each
 // moving a little between frames, with the object id per point.
@@ -51,8 +68,24 @@ void apply_args(benchmark::internal::Benchmark* b) {
   b->ArgNames({"points", "kind"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
+// Arguments: {points, model kind, implementation (0 fused, 1 unfused reference)}.
+void apply_impl_args(benchmark::internal::Benchmark* b) {
+  for (int kind : {0, 1, 2}) {
+    for (int n : {1000, 3000, 10000}) {
+      for (int impl : {0, 1}) b->Args({n, kind, impl});
+    }
+  }
+  b->ArgNames({"points", "kind", "unfused"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+// Selects the formulation for one benchmark run and names it in the label.
+std::string use_implementation(int64_t arg, const ModelConfig& config) {
+  set_conv_implementation(arg ? ConvImplementation::kUnfused : ConvImplementation::kFused);
+  return to_string(config.kind) + (arg ? " unfused" : " fused");
+}
+
 void BM_NeighbourSearch(benchmark::State& state) {
-  torch::set_num_threads(2);
+  set_torch_threads(bench_threads());
   const PointState s = make_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
   for (auto _ : state) benchmark::DoNotOptimize(model->build_hierarchy(s));
@@ -61,16 +94,17 @@ void BM_NeighbourSearch(benchmark::State& state) {
 BENCHMARK(BM_NeighbourSearch)->Apply(apply_args);
 
 void BM_Network(benchmark::State& state) {
-  torch::set_num_threads(2);
+  set_torch_threads(bench_threads());
   const PointState s = make_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
+  state.SetLabel(use_implementation(state.range(2), model->config()));
   model->eval();
   const ModelInput input = make_model_input(s, model->build_hierarchy(s));
   torch::NoGradGuard no_grad;
   for (auto _ : state) benchmark::DoNotOptimize(model->predict_positions(input));
-  state.SetLabel(to_string(model->config().kind));
+  set_conv_implementation(ConvImplementation::kFused);
 }
-BENCHMARK(BM_Network)->Apply(apply_args);
+BENCHMARK(BM_Network)->Apply(apply_impl_args);
 
 void BM_PoseFitting(benchmark::State& state) {
   const PointState s = make_state(static_cast<int>(state.range(0)));
@@ -96,9 +130,10 @@ BENCHMARK(BM_PoseFitting)
 // A whole rollout step as `dynscope rollout` runs it: hierarchy, network, then one Kabsch fit per
 // object; frames per second are the inverse of the time per iteration.
 void BM_RolloutStep(benchmark::State& state) {
-  torch::set_num_threads(2);
+  set_torch_threads(bench_threads());
   const PointState s = make_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
+  state.SetLabel(use_implementation(state.range(2), model->config()));
   model->eval();
   for (auto _ : state) {
     const Points next = model->predict_next(s);
@@ -113,13 +148,93 @@ void BM_RolloutStep(benchmark::State& state) {
   }
   state.counters["fps"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  // Process-wide high-water mark: runs go from small to large, so it bounds this run's peak.
+  set_conv_implementation(ConvImplementation::kFused);
+}
+BENCHMARK(BM_RolloutStep)->Apply(apply_impl_args);
+
+// The default movi-a recipe's model and a state of the first bundled movi-a scene, as training
+// sees them (the recipe's sampling, frame 12).
+struct TrainCase {
+  DynamicsModel model{nullptr};
+  PointState state;
+  torch::Tensor truth;
+};
+
+TrainCase movi_train_case() {
+  const std::string root = DYNSCOPE_SOURCE_DIR;
+  const std::string recipe_file = root + "/assets/recipes/movi-a_pointconv_acc.json";
+  std::ifstream in(recipe_file);
+  std::stringstream text;
+  text << in.rdbuf();
+  TrainOptions recipe = TrainOptions::from_json(text.str(), recipe_file);
+  recipe.resolve("movi-a");
+  const Scene scene = read_scene(root + "/assets/scenes/movi-a_0000.h5");
+  const ModelPoints points = build_model_points(scene, recipe.sampling);
+  TrainCase c;
+  torch::manual_seed(1);
+  c.model = DynamicsModel(recipe.model);
+  c.model->train();
+  const int t = 12;
+  c.state = PointState::from_positions(points.positions(scene, t), points.positions(scene, t - 1),
+                                       points.positions(scene, t - 2), points.cloud.object_id);
+  c.truth = points_to_tensor(points.positions(scene, t + 1));
+  return c;
+}
+
+// One optimiser step: forward, Huber loss, backward, Adam. Argument {unfused, hierarchy}: with
+// hierarchy = 1 the step also builds the example's hierarchy (what training does when the
+// prefetch thread cannot hide it).
+void BM_TrainStep(benchmark::State& state) {
+  set_torch_threads(1);
+  TrainCase c = movi_train_case();
+  state.SetLabel(use_implementation(state.range(0), c.model->config()) +
+                 (state.range(1) ? " +hierarchy" : "") + ", " + std::to_string(c.state.size()) +
+                 " points, 1 thread");
+  torch::optim::Adam adam(c.model->parameters(), torch::optim::AdamOptions(5e-3));
+  const ModelInput prepared = make_model_input(c.state, c.model->build_hierarchy(c.state));
+  for (auto _ : state) {
+    const ModelInput input =
+        state.range(1) ? make_model_input(c.state, c.model->build_hierarchy(c.state)) : prepared;
+    adam.zero_grad();
+    const torch::Tensor err = (c.model->predict_positions(input) - c.truth).to(torch::kFloat);
+    torch::nn::functional::huber_loss(err, torch::zeros_like(err)).backward();
+    adam.step();
+  }
+  state.counters["steps_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  set_conv_implementation(ConvImplementation::kFused);
+}
+BENCHMARK(BM_TrainStep)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->ArgNames({"unfused", "hierarchy"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Peak resident memory of training steps of the paper's architecture (Physion preset, C = 32,
+// 4 levels) on 10k points. getrusage reports the process's high-water mark, so run this row on
+// its own (--benchmark_filter=BM_TrainMemory) for a clean number.
+void BM_TrainMemory(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const PointState s = make_state(10000);
+  DynamicsModel model(config_for(0));
+  model->train();
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(1e-3));
+  const ModelInput input = make_model_input(s, model->build_hierarchy(s));
+  const torch::Tensor truth = input.position + 0.001;
+  for (auto _ : state) {
+    adam.zero_grad();
+    const torch::Tensor err = (model->predict_positions(input) - truth).to(torch::kFloat);
+    torch::nn::functional::huber_loss(err, torch::zeros_like(err)).backward();
+    adam.step();
+  }
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   state.counters["peak_rss_MiB"] = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  state.SetLabel(to_string(model->config().kind));
 }
-BENCHMARK(BM_RolloutStep)->Apply(apply_args);
+BENCHMARK(BM_TrainMemory)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 }  // namespace
 }  // namespace dynscope

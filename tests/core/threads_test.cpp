@@ -17,8 +17,9 @@ TEST(ThreadsTest, SetBudgetReachesOpenMp) {
   EXPECT_EQ(compute_threads(), 3);
   EXPECT_EQ(omp_get_max_threads(), 3);
   set_compute_threads(0);
-  EXPECT_EQ(compute_threads(), default_compute_threads());
-  EXPECT_GE(default_compute_threads(), 1);
+  EXPECT_EQ(compute_threads(), kDefaultComputeThreads);
+  EXPECT_EQ(omp_get_max_threads(), kDefaultComputeThreads);
+  EXPECT_GE(available_cores(), 1);
 }
 
 TEST(ThreadsTest, RejectsCountsOutOfRange) {

@@ -7,6 +7,7 @@
 
 #include "engine/io/scene_file.h"
 #include "engine/rollout/evaluation.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
 

@@ -1,0 +1,30 @@
+// What this process runs on: the BLAS library it mapped, thread counts, cores (no torch, no GL).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace dynscope {
+
+/// The BLAS serving this process, read from its own mappings (not from the package system).
+struct BlasInfo {
+  std::string library;      ///< Real path of the library whose sgemm_ the process calls ("" if
+                            ///< no BLAS is mapped).
+  std::string config;       ///< openblas_get_config() when it is OpenBLAS, else "".
+  int threads = 0;          ///< openblas_get_num_threads() when it is OpenBLAS, else 0.
+  bool reference = false;   ///< True for Debian's netlib reference BLAS (…/blas/libblas.so.*).
+};
+
+/// Looks up sgemm_ in the process and names the mapped file that defines it.
+BlasInfo blas_info();
+
+/// Real paths of every mapped shared library whose file name contains `fragment`, from
+/// /proc/self/maps, each once, in mapping order.
+std::vector<std::string> mapped_libraries(const std::string& fragment);
+
+/// Key/value lines describing the machine and this process's compute setup (cores, compute
+/// threads, OpenMP threads, BLAS library and threads, a warning line for the reference BLAS).
+std::vector<std::pair<std::string, std::string>> system_context();
+
+}  // namespace dynscope
