@@ -41,14 +41,16 @@ TEST(InfoCommand, DescribesABundledSceneAsJson) {
 TEST(InfoCommand, TableNamesRolesFramesAndPointCounts) {
   const auto r = run_dynscope("info " + kSource + "/assets/scenes/movi-a_0000.h5");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* word : {"scenario   movi-a", "frames     24", "dt 0.08333", "voxel 0.2", "role"}) {
+  for (const char* word :
+       {"scenario   movi-a", "frames     24", "dt 0.08333", "voxel 0.2", "role"}) {
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   }
 }
 
 TEST(InfoCommand, SmallerVoxelGivesMorePoints) {
   const std::string scene = kSource + "/assets/scenes/movi-a_0000.h5";
-  const auto coarse = nlohmann::json::parse(run_dynscope("info --json --voxel 0.4 " + scene).output);
+  const auto coarse =
+      nlohmann::json::parse(run_dynscope("info --json --voxel 0.4 " + scene).output);
   const auto fine = nlohmann::json::parse(run_dynscope("info --json --voxel 0.2 " + scene).output);
   EXPECT_GT(fine["num_points"].get<int64_t>(), 2 * coarse["num_points"].get<int64_t>());
 }
@@ -62,6 +64,28 @@ TEST(InfoCommand, DescribesAMesh) {
   EXPECT_EQ(j["faces"], 1024);  // 512 quads, triangulated
   // Torus area 4π²Rr = 1.184 for R = 0.3, r = 0.1; the 32×16 polygon is slightly smaller.
   EXPECT_NEAR(j["area"].get<double>(), 1.184, 0.02);
+}
+
+// --system reads the process's own mappings: the BLAS named must be a file this machine has, and
+// it must agree with what libblas.so.3 resolves to (the library LibTorch links).
+TEST(InfoCommand, SystemNamesTheMappedBlasThreadsLibTorchAndGl) {
+  const auto r = run_dynscope("info --system --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  for (const char* key : {"cores", "compute_threads", "openmp_threads", "blas", "libtorch", "cuda",
+                          "torch_intraop_threads", "gl_headless"}) {
+    EXPECT_TRUE(j.contains(key)) << key << " missing in " << r.output;
+  }
+  const std::string blas = j["blas"];
+  ASSERT_TRUE(std::filesystem::exists(blas)) << blas;
+  const auto linked = std::filesystem::canonical("/usr/lib/x86_64-linux-gnu/libblas.so.3");
+  if (blas.find("libblas") != std::string::npos)
+    EXPECT_EQ(std::filesystem::canonical(blas), linked);
+  EXPECT_EQ(j.contains("warning"), blas.find("/blas/libblas.so") != std::string::npos);
+  EXPECT_EQ(j["compute_threads"], "1") << "the default budget is one thread";
+  const auto none = run_dynscope("info");
+  EXPECT_NE(none.exit_code, 0);
+  EXPECT_NE(none.output.find("--system"), std::string::npos) << none.output;
 }
 
 TEST(InfoCommand, BadInputGivesOneClearLineAndNonZeroExit) {
