@@ -1,7 +1,8 @@
-// Exact double-precision nearest-neighbour and radius queries over a fixed point set (PCL inside).
+// Exact double-precision nearest-neighbour and radius queries over a fixed point set.
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -21,13 +22,15 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
-/// Kd-tree over `[N,3]` points whose answers equal a brute-force search in double: PCL's float
-/// tree proposes candidates with a safety margin, and distances are recomputed in double. Results
-/// are sorted by (squared distance, index), so ties resolve to the lowest index.
+/// Kd-tree (nanoflann) over `[N,3]` points whose answers equal a brute-force search in double: the
+/// tree works in double with squared_distance() itself and widens its pruning bound by far more
+/// than its rounding error, so no candidate at or below the answer's distance is ever skipped.
+/// Results are sorted by (squared distance, index), so ties resolve to the lowest index. Const
+/// queries may run concurrently from several threads.
 class KdIndex {
  public:
   /// Copies `points` (may have zero rows). Throws ValueError(`what`) if a coordinate is not
-  /// finite or too large for the float tree (|x| > 1e18).
+  /// finite or too large for squared distances to stay finite (|x| > 1e18).
   explicit KdIndex(const Points& points, const char* what = "points");
   ~KdIndex();
   KdIndex(KdIndex&&) noexcept;
@@ -39,22 +42,19 @@ class KdIndex {
   Eigen::Index size() const { return points_.rows(); }
   /// Indexed point `i`.
   Vec3 point(Eigen::Index i) const { return points_.row(i).transpose(); }
-  /// Replaces `out` with the min(k, size()) nearest points to `query`, sorted; empty for k <= 0.
-  void knn(const Vec3& query, int k, std::vector<Neighbor>& out) const;
+  /// Replaces `out` with the min(k, size()) nearest points to `query` whose squared distance is
+  /// <= `max_sq_dist` (default: no limit), sorted; empty for k <= 0. Throws ValueError for a
+  /// non-finite query.
+  void knn(const Vec3& query, int k, std::vector<Neighbor>& out,
+           double max_sq_dist = std::numeric_limits<double>::infinity()) const;
   /// Replaces `out` with every point whose squared distance to `query` is <= radius², sorted.
+  /// Throws ValueError for a non-finite query.
   void radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const;
 
  private:
   struct Tree;
-  /// Upper bound on |float distance − exact distance| for a query, given a distance scale.
-  double margin(const Vec3& query, double distance) const;
-  /// Float-tree radius search followed by exact filtering at `exact_sq_limit`.
-  void radius_candidates(const Vec3& query, double float_radius, double exact_sq_limit,
-                         std::vector<Neighbor>& out) const;
 
   Points points_;
-  Vec3 centre_ = Vec3::Zero();
-  double extent_ = 0.0;
   std::unique_ptr<Tree> tree_;
 };
 

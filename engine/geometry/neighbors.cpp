@@ -1,23 +1,22 @@
-// Same-object, other-object and plain kNN built on one exact kd-tree per object.
+// Same-object, other-object and plain kNN built on one exact kd-tree per object, queried in
+// parallel.
 #include "engine/geometry/neighbors.h"
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <string>
 
 #include "engine/core/error.h"
-#include "engine/geometry/kdtree_index.h"
+#include "engine/core/threads.h"
 
 namespace dynscope {
 namespace {
 
-// Source points of one object: its kd-tree, the global index of each local point and its box.
-struct ObjectTree {
-  std::vector<int32_t> global;
-  KdIndex tree;
-  Aabb box;
-};
+// Below this many queries a parallel region costs more than it saves.
+constexpr Eigen::Index kMinParallelQueries = 256;
+// Queries per scheduling chunk: large enough to amortise scheduling, small enough that a thread
+// slowed down by a busy core does not hold the others up.
+constexpr int kQueryChunk = 64;
 
 void check_points(const Points& points, const std::vector<int32_t>* ids, const std::string& what) {
   if (ids != nullptr && static_cast<size_t>(points.rows()) != ids->size()) {
@@ -35,31 +34,17 @@ void check_k(int k) {
   if (k <= 0) throw ValueError("k", "must be positive, got " + std::to_string(k));
 }
 
+void check_radius(double radius) {
+  if (!std::isfinite(radius) || radius < 0.0) {
+    throw ValueError("radius", "must be finite and >= 0, got " + std::to_string(radius));
+  }
+}
+
 NeighborList empty_list(Eigen::Index rows, int k) {
   NeighborList out;
   out.index = IndexMatrix::Constant(rows, k, -1);
   out.mask = MaskMatrix::Zero(rows, k);
   return out;
-}
-
-// Builds one tree per object id; local indices follow ascending global order, so tie-breaking by
-// local index equals tie-breaking by global index.
-std::map<int32_t, ObjectTree> build_object_trees(const Points& source,
-                                                 const std::vector<int32_t>& source_ids) {
-  std::map<int32_t, std::vector<int32_t>> members;
-  for (size_t i = 0; i < source_ids.size(); ++i) {
-    members[source_ids[i]].push_back(static_cast<int32_t>(i));
-  }
-  std::map<int32_t, ObjectTree> trees;
-  for (auto& [id, global] : members) {
-    Points local(static_cast<Eigen::Index>(global.size()), 3);
-    for (size_t j = 0; j < global.size(); ++j) {
-      local.row(static_cast<Eigen::Index>(j)) = source.row(global[j]);
-    }
-    const Aabb box = Aabb::of(local);
-    trees.emplace(id, ObjectTree{std::move(global), KdIndex(local, "source"), box});
-  }
-  return trees;
 }
 
 void write_row(NeighborList& out, Eigen::Index row, const std::vector<Neighbor>& found,
@@ -78,58 +63,52 @@ double squared_distance_to_box(const Vec3& p, const Aabb& box) {
   return d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
 }
 
-}  // namespace
-
-int NeighborList::valid_count(Eigen::Index row) const {
-  int n = 0;
-  for (Eigen::Index j = 0; j < mask.cols(); ++j) n += mask(row, j) != 0 ? 1 : 0;
-  return n;
+// Calls answer(row, found, merged) for every query row, in parallel over rows on the compute
+// threads. Each row is answered on its own with thread-private scratch, so the result does not
+// depend on the thread count or the schedule. `answer` must not throw (inputs are checked first).
+template <typename Answer>
+void for_each_query(Eigen::Index rows, const Answer& answer) {
+  const int threads = rows >= kMinParallelQueries ? compute_threads() : 1;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    std::vector<Neighbor> found, merged;
+#pragma omp for schedule(dynamic, kQueryChunk)
+    for (Eigen::Index i = 0; i < rows; ++i) answer(i, found, merged);
+  }
 }
 
-NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,
-                             const Points& source, const std::vector<int32_t>& source_ids, int k) {
-  check_k(k);
-  check_points(query, &query_ids, "query");
-  check_points(source, &source_ids, "source");
+// The rows of knn_same_object; inputs already checked.
+NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& query_ids,
+                              const ObjectIndex& source, int k) {
   NeighborList out = empty_list(query.rows(), k);
-  const std::map<int32_t, ObjectTree> trees = build_object_trees(source, source_ids);
-  std::vector<Neighbor> found;
-  for (Eigen::Index i = 0; i < query.rows(); ++i) {
-    const auto it = trees.find(query_ids[static_cast<size_t>(i)]);
-    if (it == trees.end()) continue;
-    it->second.tree.knn(query.row(i).transpose(), k, found);
-    write_row(out, i, found, &it->second.global);
-  }
+  for_each_query(
+      query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found, std::vector<Neighbor>&) {
+        const ObjectIndex::Object* object = source.find(query_ids[static_cast<size_t>(i)]);
+        if (object == nullptr) return;
+        object->tree.knn(query.row(i).transpose(), k, found);
+        write_row(out, i, found, &object->global);
+      });
   return out;
 }
 
-NeighborList knn_other_objects(const Points& query, const std::vector<int32_t>& query_ids,
-                               const Points& source, const std::vector<int32_t>& source_ids, int k,
-                               double radius) {
-  check_k(k);
-  if (!std::isfinite(radius) || radius < 0.0) {
-    throw ValueError("radius", "must be finite and >= 0, got " + std::to_string(radius));
-  }
-  check_points(query, &query_ids, "query");
-  check_points(source, &source_ids, "source");
+// The rows of knn_other_objects; inputs already checked.
+NeighborList other_object_rows(const Points& query, const std::vector<int32_t>& query_ids,
+                               const ObjectIndex& source, int k, double radius) {
   NeighborList out = empty_list(query.rows(), k);
-  const std::map<int32_t, ObjectTree> trees = build_object_trees(source, source_ids);
   const double sq_radius = radius * radius;
-  std::vector<Neighbor> found, merged;
-  for (Eigen::Index i = 0; i < query.rows(); ++i) {
+  for_each_query(query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found,
+                                   std::vector<Neighbor>& merged) {
     const Vec3 q = query.row(i).transpose();
     const int32_t own = query_ids[static_cast<size_t>(i)];
     merged.clear();
-    for (const auto& [id, object] : trees) {
+    for (const ObjectIndex::Object& object : source.objects()) {
       // Rounding is monotone, so a point's computed squared distance is never below its box's:
       // skipping boxes beyond the radius cannot lose a neighbour.
-      if (id == own || squared_distance_to_box(q, object.box) > sq_radius) {
-        continue;
-      }
-      // The exact k nearest of each other object contain the exact k nearest of their union.
-      object.tree.knn(q, k, found);
+      if (object.id == own || squared_distance_to_box(q, object.box) > sq_radius) continue;
+      // The exact k nearest of each other object within the radius contain the exact k nearest
+      // of their union.
+      object.tree.knn(q, k, found, sq_radius);
       for (const Neighbor& n : found) {
-        if (n.sq_dist > sq_radius) break;
         merged.push_back({n.sq_dist, object.global[static_cast<size_t>(n.index)]});
       }
     }
@@ -138,22 +117,103 @@ NeighborList knn_other_objects(const Points& query, const std::vector<int32_t>& 
     });
     if (merged.size() > static_cast<size_t>(k)) merged.resize(static_cast<size_t>(k));
     write_row(out, i, merged, nullptr);
-  }
+  });
   return out;
+}
+
+// The rows of knn_all; inputs already checked.
+NeighborList all_rows(const Points& query, const KdIndex& source, int k) {
+  NeighborList out = empty_list(query.rows(), k);
+  for_each_query(query.rows(),
+                 [&](Eigen::Index i, std::vector<Neighbor>& found, std::vector<Neighbor>&) {
+                   source.knn(query.row(i).transpose(), k, found);
+                   write_row(out, i, found, nullptr);
+                 });
+  return out;
+}
+
+}  // namespace
+
+int NeighborList::valid_count(Eigen::Index row) const {
+  int n = 0;
+  for (Eigen::Index j = 0; j < mask.cols(); ++j) n += mask(row, j) != 0 ? 1 : 0;
+  return n;
+}
+
+ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
+    : size_(points.rows()) {
+  check_points(points, &ids, "source");
+  // Group by id with one sort instead of a map: local indices follow ascending global order, so
+  // tie-breaking by local index equals tie-breaking by global index.
+  std::vector<int32_t> order(ids.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int32_t>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
+  });
+  for (size_t begin = 0; begin < order.size();) {
+    const int32_t id = ids[static_cast<size_t>(order[begin])];
+    size_t end = begin;
+    while (end < order.size() && ids[static_cast<size_t>(order[end])] == id) ++end;
+    std::vector<int32_t> global(order.begin() + static_cast<std::ptrdiff_t>(begin),
+                                order.begin() + static_cast<std::ptrdiff_t>(end));
+    Points local(static_cast<Eigen::Index>(global.size()), 3);
+    for (size_t j = 0; j < global.size(); ++j) {
+      local.row(static_cast<Eigen::Index>(j)) = points.row(global[j]);
+    }
+    const Aabb box = Aabb::of(local);
+    objects_.push_back(Object{id, std::move(global), KdIndex(local, "source"), box});
+    begin = end;
+  }
+}
+
+const ObjectIndex::Object* ObjectIndex::find(int32_t id) const {
+  const auto it = std::lower_bound(objects_.begin(), objects_.end(), id,
+                                   [](const Object& o, int32_t v) { return o.id < v; });
+  return it != objects_.end() && it->id == id ? &*it : nullptr;
+}
+
+NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,
+                             const Points& source, const std::vector<int32_t>& source_ids, int k) {
+  check_k(k);
+  check_points(query, &query_ids, "query");
+  return same_object_rows(query, query_ids, ObjectIndex(source, source_ids), k);
+}
+
+NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,
+                             const ObjectIndex& source, int k) {
+  check_k(k);
+  check_points(query, &query_ids, "query");
+  return same_object_rows(query, query_ids, source, k);
+}
+
+NeighborList knn_other_objects(const Points& query, const std::vector<int32_t>& query_ids,
+                               const Points& source, const std::vector<int32_t>& source_ids, int k,
+                               double radius) {
+  check_k(k);
+  check_radius(radius);
+  check_points(query, &query_ids, "query");
+  return other_object_rows(query, query_ids, ObjectIndex(source, source_ids), k, radius);
+}
+
+NeighborList knn_other_objects(const Points& query, const std::vector<int32_t>& query_ids,
+                               const ObjectIndex& source, int k, double radius) {
+  check_k(k);
+  check_radius(radius);
+  check_points(query, &query_ids, "query");
+  return other_object_rows(query, query_ids, source, k, radius);
 }
 
 NeighborList knn_all(const Points& query, const Points& source, int k) {
   check_k(k);
   check_points(query, nullptr, "query");
   check_points(source, nullptr, "source");
-  NeighborList out = empty_list(query.rows(), k);
-  const KdIndex tree(source, "source");
-  std::vector<Neighbor> found;
-  for (Eigen::Index i = 0; i < query.rows(); ++i) {
-    tree.knn(query.row(i).transpose(), k, found);
-    write_row(out, i, found, nullptr);
-  }
-  return out;
+  return all_rows(query, KdIndex(source, "source"), k);
+}
+
+NeighborList knn_all(const Points& query, const KdIndex& source, int k) {
+  check_k(k);
+  check_points(query, nullptr, "query");
+  return all_rows(query, source, k);
 }
 
 }  // namespace dynscope

@@ -2,6 +2,7 @@
 #include "engine/model/hierarchy.h"
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "engine/core/error.h"
@@ -48,13 +49,34 @@ std::vector<int32_t> select_ids(const std::vector<int32_t>& ids, const std::vect
   return out;
 }
 
-// Same-object kNN for the paper's model, plain kNN for the flat baseline.
-NeighborList object_list(const HierarchyOptions& o, const Points& query,
-                         const std::vector<int32_t>& query_ids, const Points& source,
-                         const std::vector<int32_t>& source_ids) {
-  if (o.object_centric) return knn_same_object(query, query_ids, source, source_ids, o.k);
-  return knn_all(query, source, o.k);
-}
+// The source trees of one level, built once and read by every list whose sources are that level
+// (same, relational, the next level's down list and this level's up list).
+class LevelIndex {
+ public:
+  LevelIndex(const HierarchyOptions& o, const HierarchyLevel& level) {
+    if (o.object_centric) {
+      objects_ = std::make_unique<ObjectIndex>(level.points, level.object_ids);
+    } else {
+      all_ = std::make_unique<KdIndex>(level.points, "source");
+    }
+  }
+
+  // Same-object kNN for the paper's model, plain kNN for the flat baseline.
+  NeighborList object_list(const HierarchyOptions& o, const HierarchyLevel& query) const {
+    if (objects_) return knn_same_object(query.points, query.object_ids, *objects_, o.k);
+    return knn_all(query.points, *all_, o.k);
+  }
+
+  // Other-object kNN within `radius` (object-centric levels only).
+  NeighborList relational_list(const HierarchyOptions& o, const HierarchyLevel& query) const {
+    return knn_other_objects(query.points, query.object_ids, *objects_, o.k_relational,
+                             query.radius);
+  }
+
+ private:
+  std::unique_ptr<ObjectIndex> objects_;
+  std::unique_ptr<KdIndex> all_;
+};
 
 }  // namespace
 
@@ -71,6 +93,7 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
   Hierarchy h;
   h.grid_anchor = Vec3(points.col(0).minCoeff(), points.col(1).minCoeff(), 0.0);
   h.levels.resize(static_cast<size_t>(options.levels));
+  std::unique_ptr<LevelIndex> prev_index;
   for (int l = 0; l < options.levels; ++l) {
     HierarchyLevel& level = h.levels[static_cast<size_t>(l)];
     level.radius = options.radius * std::pow(options.growth, l);
@@ -88,16 +111,17 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
                        : grid_downsample(shifted, level.voxel);
       level.points = select_rows(prev.points, level.kept);
       level.object_ids = select_ids(prev.object_ids, level.kept);
-      level.down =
-          object_list(options, level.points, level.object_ids, prev.points, prev.object_ids);
-      level.up = object_list(options, prev.points, prev.object_ids, level.points, level.object_ids);
     }
-    level.same =
-        object_list(options, level.points, level.object_ids, level.points, level.object_ids);
+    auto index = std::make_unique<LevelIndex>(options, level);
+    if (l > 0) {
+      level.down = prev_index->object_list(options, level);
+      level.up = index->object_list(options, h.levels[static_cast<size_t>(l - 1)]);
+    }
+    level.same = index->object_list(options, level);
     if (options.object_centric && options.point_relational) {
-      level.relational = knn_other_objects(level.points, level.object_ids, level.points,
-                                           level.object_ids, options.k_relational, level.radius);
+      level.relational = index->relational_list(options, level);
     }
+    prev_index = std::move(index);
   }
   return h;
 }

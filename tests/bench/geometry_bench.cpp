@@ -1,22 +1,33 @@
-// Geometry benchmarks: kd-tree kNN and grid downsampling against brute-force baselines.
+// Geometry benchmarks: exact kNN (nanoflann in double, parallel) beside the PCL formulation it
+// replaced, hierarchy building, grid downsampling, and brute-force baselines.
 //
 // Scene: 10 sphere surfaces (radius 0.5, 1.05 apart, so neighbouring objects are 0.05 apart)
 // sampled uniformly by area, N points in total. kNN uses K = 16; the relational radius is 0.1.
-// The kd-tree benchmarks answer every point as a query (tree building included); the brute-force
-// benchmarks (names ending _1000Queries) answer 1000 strided queries only, so compare the
-// items_per_second columns (queries per second), not the times. Grid downsampling is compared
-// with a std::map keyed by cell (the straightforward version) over the same points.
+// Rows named Pcl* run the previous formulation (PCL float kd-trees with double re-ranking, a new
+// map of trees per list, serial queries; tests/bench/legacy_neighbors.h) on the same data in the
+// same run, so speedups are ratios of the items_per_second columns. Rows taking a `threads`
+// argument run on that many compute threads. The kd-tree rows answer every point as a query
+// (tree building included); the brute-force rows (names ending _1000Queries) answer 1000 strided
+// queries only, so compare queries per second, not times.
+//
+// Hierarchy rows: build_hierarchy with the Physion preset (4 levels, voxel 0.075, radius 0.1,
+// K = 16) over points on 8 spheres of radius 0.1 in a row (as model_bench's make_state).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 #include <tuple>
 
 #include "engine/core/rng.h"
+#include "engine/core/threads.h"
 #include "engine/geometry/grid_downsample.h"
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/surface_sampling.h"
+#include "engine/model/hierarchy.h"
+#include "engine/model/model_config.h"
+#include "tests/bench/legacy_neighbors.h"
 #include "tests/geometry/reference_neighbors.h"
 
 namespace dynscope {
@@ -66,10 +77,39 @@ Cloud query_subset(const Cloud& c) {
   return q;
 }
 
+// Runs the loop of `state` on state.range(1) compute threads, restoring the budget afterwards.
+class ThreadScope {
+ public:
+  explicit ThreadScope(const benchmark::State& state) : saved_(compute_threads()) {
+    set_compute_threads(static_cast<int>(state.range(1)));
+  }
+  ~ThreadScope() { set_compute_threads(saved_); }
+
+ private:
+  int saved_;
+};
+
+bool same_lists(const NeighborList& a, const NeighborList& b) {
+  return a.index == b.index && a.mask == b.mask;
+}
+
 void BM_KnnSameObject(benchmark::State& state) {
   const Cloud& c = cloud(state.range(0));
+  const ThreadScope threads(state);
   for (auto _ : state) {
     benchmark::DoNotOptimize(knn_same_object(c.points, c.ids, c.points, c.ids, kK));
+  }
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+void BM_PclKnnSameObject(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  if (!same_lists(legacy::knn_same_object(c.points, c.ids, c.points, c.ids, kK),
+                  knn_same_object(c.points, c.ids, c.points, c.ids, kK))) {
+    state.SkipWithError("the PCL formulation gives different lists");
+  }
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(legacy::knn_same_object(c.points, c.ids, c.points, c.ids, kK));
   }
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
@@ -86,8 +126,22 @@ void BM_BruteForceKnnSameObject_1000Queries(benchmark::State& state) {
 
 void BM_KnnOtherObjects(benchmark::State& state) {
   const Cloud& c = cloud(state.range(0));
+  const ThreadScope threads(state);
   for (auto _ : state) {
     benchmark::DoNotOptimize(knn_other_objects(c.points, c.ids, c.points, c.ids, kK, kRadius));
+  }
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+void BM_PclKnnOtherObjects(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  if (!same_lists(legacy::knn_other_objects(c.points, c.ids, c.points, c.ids, kK, kRadius),
+                  knn_other_objects(c.points, c.ids, c.points, c.ids, kK, kRadius))) {
+    state.SkipWithError("the PCL formulation gives different lists");
+  }
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        legacy::knn_other_objects(c.points, c.ids, c.points, c.ids, kK, kRadius));
   }
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
@@ -104,7 +158,26 @@ void BM_BruteForceKnnOtherObjects_1000Queries(benchmark::State& state) {
 
 void BM_KnnAll(benchmark::State& state) {
   const Cloud& c = cloud(state.range(0));
+  const ThreadScope threads(state);
   for (auto _ : state) benchmark::DoNotOptimize(knn_all(c.points, c.points, kK));
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+// Queries only, over a tree built once (what a level's shared index serves).
+void BM_KnnAllPrebuiltTree(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  const ThreadScope threads(state);
+  const KdIndex tree(c.points);
+  for (auto _ : state) benchmark::DoNotOptimize(knn_all(c.points, tree, kK));
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+void BM_PclKnnAll(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  if (!same_lists(legacy::knn_all(c.points, c.points, kK), knn_all(c.points, c.points, kK))) {
+    state.SkipWithError("the PCL formulation gives different lists");
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(legacy::knn_all(c.points, c.points, kK));
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
 
@@ -149,25 +222,108 @@ void BM_BaselineMapGridDownsamplePerObject(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
 
-BENCHMARK(BM_KnnSameObject)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BruteForceKnnSameObject_1000Queries)
+// Points on 8 spheres of radius 0.1 in a row (model_bench's make_state) and their object ids.
+const Cloud& spheres(int64_t n) {
+  static std::map<int64_t, Cloud> cache;
+  auto it = cache.find(n);
+  if (it != cache.end()) return it->second;
+  Cloud c;
+  c.points.resize(n, 3);
+  Rng rng(1);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int o = static_cast<int>(i % 8);
+    Vec3 d(rng.normal(), rng.normal(), rng.normal());
+    d.normalize();
+    c.points.row(i) = (Vec3(0.25 * o, 0.1 * (o % 2), 0.1) + 0.1 * d).transpose();
+    c.ids.push_back(o);
+  }
+  return cache.emplace(n, std::move(c)).first->second;
+}
+
+HierarchyOptions physion_options() {
+  return HierarchyOptions::from_config(ModelConfig::preset("physion"));
+}
+
+bool same_hierarchy(const Hierarchy& a, const Hierarchy& b) {
+  if (a.num_levels() != b.num_levels()) return false;
+  for (size_t l = 0; l < a.levels.size(); ++l) {
+    const HierarchyLevel& x = a.levels[l];
+    const HierarchyLevel& y = b.levels[l];
+    if (x.kept != y.kept || x.points != y.points || x.object_ids != y.object_ids ||
+        !same_lists(x.same, y.same) || !same_lists(x.relational, y.relational) ||
+        !same_lists(x.down, y.down) || !same_lists(x.up, y.up)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void BM_BuildHierarchy(benchmark::State& state) {
+  const Cloud& c = spheres(state.range(0));
+  const ThreadScope threads(state);
+  const HierarchyOptions o = physion_options();
+  for (auto _ : state) benchmark::DoNotOptimize(build_hierarchy(c.points, c.ids, o));
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+void BM_PclBuildHierarchy(benchmark::State& state) {
+  const Cloud& c = spheres(state.range(0));
+  const HierarchyOptions o = physion_options();
+  if (!same_hierarchy(legacy::build_hierarchy(c.points, c.ids, o),
+                      build_hierarchy(c.points, c.ids, o))) {
+    state.SkipWithError("the PCL formulation gives a different hierarchy");
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(legacy::build_hierarchy(c.points, c.ids, o));
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+// Arguments {points, threads} for the library rows; the Pcl rows are serial by construction.
+void library_args(benchmark::internal::Benchmark* b) {
+  for (const int64_t n : {10000, 100000}) {
+    for (const int64_t t : {1, 2}) b->Args({n, t});
+  }
+  b->ArgNames({"points", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+void serial_args(benchmark::internal::Benchmark* b) {
+  b->Arg(10000)->Arg(100000)->ArgName("points")->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+void hierarchy_args(benchmark::internal::Benchmark* b) {
+  for (const int64_t n : {3000, 10000}) {
+    for (const int64_t t : {1, 2}) b->Args({n, t});
+  }
+  b->ArgNames({"points", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+BENCHMARK(BM_KnnAll)->Apply(library_args);
+BENCHMARK(BM_KnnAllPrebuiltTree)->Apply(library_args);
+BENCHMARK(BM_PclKnnAll)->Apply(serial_args);
+BENCHMARK(BM_BruteForceKnnAll_1000Queries)->Apply(serial_args);
+BENCHMARK(BM_KnnSameObject)->Apply(library_args);
+BENCHMARK(BM_PclKnnSameObject)->Apply(serial_args);
+BENCHMARK(BM_BruteForceKnnSameObject_1000Queries)->Apply(serial_args);
+BENCHMARK(BM_KnnOtherObjects)->Apply(library_args);
+BENCHMARK(BM_PclKnnOtherObjects)->Apply(serial_args);
+BENCHMARK(BM_BruteForceKnnOtherObjects_1000Queries)->Apply(serial_args);
+BENCHMARK(BM_BuildHierarchy)->Apply(hierarchy_args);
+BENCHMARK(BM_PclBuildHierarchy)
+    ->Arg(3000)
     ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_KnnOtherObjects)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BruteForceKnnOtherObjects_1000Queries)
-    ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_KnnAll)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BruteForceKnnAll_1000Queries)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GridDownsamplePerObject)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BaselineMapGridDownsamplePerObject)
-    ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMillisecond);
+    ->ArgName("points")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_GridDownsamplePerObject)->Apply(serial_args);
+BENCHMARK(BM_BaselineMapGridDownsamplePerObject)->Apply(serial_args);
 
 }  // namespace
 }  // namespace dynscope
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  benchmark::AddCustomContext("compute_threads_default",
+                              std::to_string(dynscope::default_compute_threads()));
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,4 +1,4 @@
-// Tests for KdIndex: exact double answers even where float distances cannot tell points apart.
+// Tests for KdIndex: exact double answers equal to brute force, ties, limits, tiny and far sets.
 #include "engine/geometry/kdtree_index.h"
 
 #include <gtest/gtest.h>
@@ -52,6 +52,83 @@ TEST(KdIndexTest, KnnAndRadiusEqualBruteForce) {
     expected.resize(10);
     index.knn(q, 10, found);
     expect_same(found, expected);
+  }
+}
+
+// Coarse lattice coordinates: many duplicates and many equal distances, so every k-th place and
+// every radius boundary is a tie that only the index order can break.
+Points lattice_cloud(uint64_t seed, Eigen::Index n, const Vec3& offset) {
+  Rng rng(seed);
+  Points points(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    points.row(i) << static_cast<double>(rng.uniform_int(0, 5)),
+        static_cast<double>(rng.uniform_int(0, 5)), static_cast<double>(rng.uniform_int(0, 3));
+    points.row(i) += offset.transpose();
+  }
+  return points;
+}
+
+TEST(KdIndexTest, TiesAndDuplicatesResolveToTheLowestIndex) {
+  for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
+    const Points points = lattice_cloud(3, 700, offset);
+    const KdIndex index(points);
+    Rng rng(4);
+    std::vector<Neighbor> found;
+    for (int t = 0; t < 60; ++t) {
+      // Half the queries sit on lattice points (distance-0 duplicates), half between them.
+      Vec3 q(static_cast<double>(rng.uniform_int(0, 5)), static_cast<double>(rng.uniform_int(0, 5)),
+             static_cast<double>(rng.uniform_int(0, 3)));
+      if (t % 2 == 1) q += Vec3(0.5, 0.5, 0.5);
+      q += offset;
+      const std::vector<Neighbor> all = brute_force(points, q);
+      for (const int k : {1, 5, 16, 40}) {
+        index.knn(q, k, found);
+        expect_same(found, std::vector<Neighbor>(all.begin(), all.begin() + k));
+      }
+      for (const double r : {0.0, 1.0, std::sqrt(2.0), 1.5}) {
+        std::vector<Neighbor> within;
+        for (const Neighbor& n : all) {
+          if (n.sq_dist <= r * r) within.push_back(n);
+        }
+        index.radius(q, r, found);
+        expect_same(found, within);
+      }
+    }
+  }
+}
+
+TEST(KdIndexTest, KnnWithinALimitKeepsOnlyPointsAtOrBelowIt) {
+  const Points points = lattice_cloud(5, 400, Vec3::Zero());
+  const KdIndex index(points);
+  std::vector<Neighbor> found;
+  for (const double limit : {0.0, 1.0, 2.0, 3.0, 100.0}) {
+    const Vec3 q(2, 3, 1);
+    std::vector<Neighbor> expected;
+    for (const Neighbor& n : brute_force(points, q)) {
+      if (n.sq_dist <= limit && expected.size() < 16) expected.push_back(n);
+    }
+    index.knn(q, 16, found, limit);
+    expect_same(found, expected);
+  }
+  index.knn(Vec3(2, 3, 1), 16, found, -1.0);
+  EXPECT_TRUE(found.empty());
+}
+
+TEST(KdIndexTest, TinySetsAndFarQueriesEqualBruteForce) {
+  Rng rng(8);
+  for (const Eigen::Index n : {1, 2, 11, 12, 13, 40}) {
+    Points points(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      points.row(i) << rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1);
+    }
+    const KdIndex index(points);
+    std::vector<Neighbor> found;
+    for (const Vec3& q : {Vec3(0.1, 0.2, 0.3), Vec3(5e17, -5e17, 1.0), Vec3(1e30, 0, 0)}) {
+      const std::vector<Neighbor> all = brute_force(points, q);
+      index.knn(q, 16, found);
+      expect_same(found,
+                  std::vector<Neighbor>(all.begin(), all.begin() + std::min<Eigen::Index>(16, n)));
+    }
   }
 }
 

@@ -10,6 +10,7 @@
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
+#include "engine/core/threads.h"
 #include "engine/geometry/grid_downsample.h"
 #include "tests/geometry/reference_neighbors.h"
 
@@ -317,6 +318,63 @@ void expect_value_error(F&& f, const std::string& name) {
   } catch (const ValueError& e) {
     EXPECT_EQ(e.name(), name) << e.what();
   }
+}
+
+TEST(NeighborsTest, SharedIndicesGiveTheSameListsAsTheOneShotFunctions) {
+  const Cloud fine = make_cloud(31, {300, 7, 250, 2, 180});
+  const std::vector<int32_t> kept = grid_downsample_per_object(fine.points, fine.ids, 0.2);
+  Cloud coarse;
+  for (const int32_t i : kept) coarse.ids.push_back(fine.ids[static_cast<size_t>(i)]);
+  coarse.points = fine.points(kept, Eigen::all);
+  const ObjectIndex fine_index(fine.points, fine.ids);
+  const ObjectIndex coarse_index(coarse.points, coarse.ids);
+  EXPECT_EQ(fine_index.size(), fine.points.rows());
+  ASSERT_EQ(fine_index.objects().size(), 5u);
+  EXPECT_EQ(fine_index.find(23)->global.size(), 250u);
+  EXPECT_EQ(fine_index.find(14), nullptr);
+  // One index per level serves every list reading that level, queried from either level.
+  expect_equal(knn_same_object(fine.points, fine.ids, fine_index, 16),
+               knn_same_object(fine.points, fine.ids, fine.points, fine.ids, 16), "same");
+  expect_equal(knn_same_object(coarse.points, coarse.ids, fine_index, 16),
+               knn_same_object(coarse.points, coarse.ids, fine.points, fine.ids, 16), "down");
+  expect_equal(knn_same_object(fine.points, fine.ids, coarse_index, 16),
+               knn_same_object(fine.points, fine.ids, coarse.points, coarse.ids, 16), "up");
+  expect_equal(knn_other_objects(fine.points, fine.ids, fine_index, 16, 0.3),
+               brute_force_knn(fine.points, fine.ids, fine.points, fine.ids, 16,
+                               Relation::kOtherObject, 0.3),
+               "other");
+  const KdIndex all_index(coarse.points);
+  expect_equal(knn_all(fine.points, all_index, 16),
+               brute_force_knn(fine.points, {}, coarse.points, {}, 16, Relation::kAll), "all");
+  expect_value_error([&] { knn_same_object(fine.points, coarse.ids, coarse_index, 4); },
+                     "query_ids");
+  expect_value_error([&] { knn_other_objects(fine.points, fine.ids, coarse_index, 4, -2.0); },
+                     "radius");
+  expect_value_error([&] { knn_all(fine.points, all_index, 0); }, "k");
+  expect_value_error([&] { ObjectIndex(fine.points, coarse.ids); }, "source_ids");
+}
+
+TEST(NeighborsTest, ListsDoNotDependOnTheThreadCount) {
+  // Enough queries for the parallel path; lattice ties make any order dependence visible.
+  Cloud c = make_cloud(41, {900, 5, 700, 600}, 0.4);
+  for (Eigen::Index i = 0; i < c.points.rows(); i += 3) {
+    c.points.row(i) = ((c.points.row(i) * 4.0).array().round() / 4.0).matrix();
+  }
+  const int saved = compute_threads();
+  NeighborList lists[2][3];
+  for (const int threads : {1, 2}) {
+    set_compute_threads(threads);
+    NeighborList* out = lists[threads - 1];
+    out[0] = knn_same_object(c.points, c.ids, c.points, c.ids, 16);
+    out[1] = knn_other_objects(c.points, c.ids, c.points, c.ids, 16, 0.3);
+    out[2] = knn_all(c.points, c.points, 16);
+  }
+  set_compute_threads(saved);
+  const char* names[] = {"same", "other", "all"};
+  for (int j = 0; j < 3; ++j) expect_equal(lists[1][j], lists[0][j], names[j]);
+  expect_equal(lists[1][1],
+               brute_force_knn(c.points, c.ids, c.points, c.ids, 16, Relation::kOtherObject, 0.3),
+               "other vs brute force");
 }
 
 TEST(NeighborsTest, BadInputsThrowNamedValueErrors) {

@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <set>
+#include <string>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
+#include "tests/geometry/reference_neighbors.h"
 #include "tests/model/model_test_util.h"
 
 namespace dynscope {
@@ -78,6 +81,64 @@ TEST(HierarchyTest, LevelsShrinkAndListsAreConsistent) {
       with_relations += lv.relational.valid_count(i) > 0;
     }
     EXPECT_GT(with_relations, 0);
+  }
+}
+
+void expect_same_list(const NeighborList& actual, const NeighborList& expected,
+                      const std::string& what) {
+  EXPECT_EQ(actual.index, expected.index) << what;
+  EXPECT_EQ(actual.mask, expected.mask) << what;
+}
+
+TEST(HierarchyTest, EveryListEqualsBruteForceOverItsLevels) {
+  using reference::brute_force_knn;
+  using reference::Relation;
+  const auto scene = make_scene(4, 150, 6);
+  const HierarchyOptions o = small_options();
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+  for (int l = 0; l < h.num_levels(); ++l) {
+    const HierarchyLevel& lv = h.levels[l];
+    const std::string what = "level " + std::to_string(l);
+    expect_same_list(lv.same,
+                     brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids, o.k,
+                                     Relation::kSameObject),
+                     what + " same");
+    expect_same_list(lv.relational,
+                     brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids,
+                                     o.k_relational, Relation::kOtherObject, lv.radius),
+                     what + " relational");
+    if (l == 0) continue;
+    const HierarchyLevel& prev = h.levels[l - 1];
+    expect_same_list(lv.down,
+                     brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids, o.k,
+                                     Relation::kSameObject),
+                     what + " down");
+    expect_same_list(lv.up,
+                     brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids, o.k,
+                                     Relation::kSameObject),
+                     what + " up");
+  }
+}
+
+TEST(HierarchyTest, DoesNotDependOnTheThreadCount) {
+  const auto scene = make_scene(3, 400, 7);
+  for (const bool object_centric : {true, false}) {
+    HierarchyOptions o = small_options();
+    o.object_centric = object_centric;
+    const int saved = compute_threads();
+    set_compute_threads(1);
+    const Hierarchy a = build_hierarchy(scene.points, scene.ids, o);
+    set_compute_threads(2);
+    const Hierarchy b = build_hierarchy(scene.points, scene.ids, o);
+    set_compute_threads(saved);
+    for (int l = 0; l < a.num_levels(); ++l) {
+      const std::string what = "level " + std::to_string(l);
+      EXPECT_EQ(a.levels[l].kept, b.levels[l].kept) << what;
+      expect_same_list(a.levels[l].same, b.levels[l].same, what + " same");
+      expect_same_list(a.levels[l].relational, b.levels[l].relational, what + " relational");
+      expect_same_list(a.levels[l].down, b.levels[l].down, what + " down");
+      expect_same_list(a.levels[l].up, b.levels[l].up, what + " up");
+    }
   }
 }
 
