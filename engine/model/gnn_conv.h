@@ -44,6 +44,12 @@ class GnnConvImpl : public torch::nn::Module {
   torch::nn::Sequential node_mlp{nullptr};
 
  private:
+  // The unfused reference formulation (ConvImplementation::kUnfused).
+  torch::Tensor forward_unfused(const torch::Tensor& query, const torch::Tensor& source,
+                                const torch::Tensor& source_features,
+                                const torch::Tensor& query_features,
+                                const NeighborTensors& neighbors);
+
   GnnConvOptions options_;
 };
 TORCH_MODULE(GnnConv);

@@ -12,10 +12,46 @@ torch::Tensor NeighborTensors::nearest() const {
   return index.select(1, 0).clamp_min(0);
 }
 
-torch::Tensor NeighborTensors::valid_count() const { return mask.sum(1).to(torch::kFloat); }
+torch::Tensor NeighborTensors::valid_count() const {
+  return count.defined() ? count : mask.sum(1).to(torch::kFloat);
+}
+
+torch::Tensor NeighborTensors::has_neighbors() const {
+  return has_any.defined() ? has_any : (valid_count() > 0).to(torch::kFloat).unsqueeze(1);
+}
+
+torch::Tensor NeighborTensors::relative(const torch::Tensor& query, const torch::Tensor& source,
+                                        double scale) const {
+  if (rel.defined()) return scale == 1.0 ? rel : rel * static_cast<float>(1.0 / scale);
+  if (query.size(0) != index.size(0)) {
+    throw ValueError("neighbor_list", "has " + std::to_string(index.size(0)) + " rows for " +
+                                          std::to_string(query.size(0)) + " query points");
+  }
+  // Differences in float64 keep them exact far from the origin; then one conversion.
+  const torch::Tensor d = gather_neighbors(source, index) - query.unsqueeze(1);
+  return ((d / scale).to(torch::kFloat) * mask.unsqueeze(-1)).contiguous();
+}
+
+void NeighborTensors::prepare(const torch::Tensor& query, const torch::Tensor& source) {
+  // A level without this list (level 0's down/up, the flat baseline's relational) stays empty.
+  if (rows() == 0) return;
+  // The fused ops read −1 as masked; lists from to_tensors are already in that form.
+  index = torch::where(mask, index, torch::full_like(index, -1));
+  rel = relative(query, source, 1.0);
+  count = mask.sum(1).to(torch::kFloat);
+  has_any = (count > 0).to(torch::kFloat).unsqueeze(1);
+}
 
 NeighborTensors NeighborTensors::to(const torch::Device& device) const {
-  return {index.to(device), mask.to(device)};
+  NeighborTensors t;
+  t.index = index.to(device);
+  t.mask = mask.to(device);
+  if (rel.defined()) {
+    t.rel = rel.to(device);
+    t.count = count.to(device);
+    t.has_any = has_any.to(device);
+  }
+  return t;
 }
 
 NeighborTensors to_tensors(const NeighborList& list, const torch::Device& device) {
@@ -57,16 +93,11 @@ torch::Tensor gather_neighbors(const torch::Tensor& values, const torch::Tensor&
   return values.index_select(0, flat).reshape({m, k, values.size(1)});
 }
 
-torch::Tensor relative_positions(const torch::Tensor& query, const torch::Tensor& source,
-                                 const torch::Tensor& index, double scale) {
-  const torch::Tensor rel = gather_neighbors(source, index) - query.unsqueeze(1);
-  return (rel / scale).to(torch::kFloat);
-}
-
 HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& device) {
   HierarchyTensors out;
   out.levels.reserve(hierarchy.levels.size());
-  for (const HierarchyLevel& level : hierarchy.levels) {
+  for (size_t l = 0; l < hierarchy.levels.size(); ++l) {
+    const HierarchyLevel& level = hierarchy.levels[l];
     LevelTensors t;
     t.points = points_to_tensor(level.points, device);
     t.same = to_tensors(level.same, device);
@@ -74,15 +105,26 @@ HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& dev
     t.down = to_tensors(level.down, device);
     t.up = to_tensors(level.up, device);
     t.radius = level.radius;
+    t.same.prepare(t.points, t.points);
+    t.relational.prepare(t.points, t.points);
+    if (l > 0) {
+      const LevelTensors& finer = out.levels.back();
+      t.down.prepare(t.points, finer.points);
+      t.up.prepare(finer.points, t.points);
+    }
     out.levels.push_back(std::move(t));
   }
   if (hierarchy.has_mesh && !out.levels.empty()) {
     LevelTensors& l0 = out.levels.front();
     l0.has_mesh = true;
-    l0.mesh.points = points_to_tensor(hierarchy.mesh.points, device);
-    l0.mesh.face_vertices = to_tensors(hierarchy.mesh.face_vertices, device);
-    l0.mesh.senders = to_tensors(hierarchy.mesh.senders, device);
-    l0.mesh.vertex_points = to_tensors(hierarchy.mesh.vertex_points, device);
+    MeshTensors& mesh = l0.mesh;
+    mesh.points = points_to_tensor(hierarchy.mesh.points, device);
+    mesh.face_vertices = to_tensors(hierarchy.mesh.face_vertices, device);
+    mesh.senders = to_tensors(hierarchy.mesh.senders, device);
+    mesh.vertex_points = to_tensors(hierarchy.mesh.vertex_points, device);
+    mesh.face_vertices.prepare(mesh.points, l0.points);
+    mesh.senders.prepare(mesh.points, mesh.points);
+    mesh.vertex_points.prepare(l0.points, mesh.points);
   }
   return out;
 }

@@ -11,15 +11,28 @@
 namespace dynscope {
 
 /// A NeighborList as tensors: `index` int64 `[M,K]` (−1 where masked), `mask` bool `[M,K]`.
+/// prepare() fills what every convolution reading the list shares, once per forward pass: the
+/// relative positions p_k − p_0 and the valid counts. Unprepared lists compute them on demand.
 struct NeighborTensors {
   torch::Tensor index;
   torch::Tensor mask;
+  torch::Tensor rel;      ///< Prepared: p_k − p_0 float32 `[M,K,3]`, zero where masked.
+  torch::Tensor count;    ///< Prepared: valid neighbours per row, float32 `[M]`.
+  torch::Tensor has_any;  ///< Prepared: 1 where a row has a valid neighbour, float32 `[M,1]`.
 
   int64_t rows() const { return index.defined() ? index.size(0) : 0; }
   /// The nearest valid source of every row (column 0, clamped to 0 for fully masked rows), `[M]`.
   torch::Tensor nearest() const;
   /// Number of valid neighbours per row as float32 `[M]`.
   torch::Tensor valid_count() const;
+  /// 1 where a row has a valid neighbour, else 0, float32 `[M,1]`.
+  torch::Tensor has_neighbors() const;
+  /// (p_k − p_0) / scale as float32 `[M,K,3]`, zero where masked; `query` `[M,3]` and `source`
+  /// `[N,3]` float64 must be the points the list was built on (prepared lists ignore them).
+  torch::Tensor relative(const torch::Tensor& query, const torch::Tensor& source,
+                         double scale) const;
+  /// Computes rel, count and has_any from the list's `query` `[M,3]` and `source` `[N,3]` points.
+  void prepare(const torch::Tensor& query, const torch::Tensor& source);
   NeighborTensors to(const torch::Device& device) const;
 };
 
@@ -33,11 +46,6 @@ torch::Tensor points_to_tensor(const Points& points, const torch::Device& device
 /// Rows of `values` `[N,C]` at `index` `[M,K]` → `[M,K,C]`; masked (−1) entries read row 0, so
 /// callers must zero them with the mask.
 torch::Tensor gather_neighbors(const torch::Tensor& values, const torch::Tensor& index);
-
-/// p_k − p_0 for every neighbour: `query` `[M,3]`, `source` `[N,3]` (float64) → float32 `[M,K,3]`
-/// divided by `scale`; masked entries hold garbage and must be masked by the caller.
-torch::Tensor relative_positions(const torch::Tensor& query, const torch::Tensor& source,
-                                 const torch::Tensor& index, double scale = 1.0);
 
 /// MeshInteraction as tensors: interaction points float64 `[I,3]` and its three lists.
 struct MeshTensors {
@@ -60,7 +68,7 @@ struct HierarchyTensors {
   int num_levels() const { return static_cast<int>(levels.size()); }
 };
 
-/// Converts a Hierarchy (copies every list).
+/// Converts a Hierarchy (copies every list) and prepares every list on its level's points.
 HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& device = torch::kCPU);
 
 }  // namespace dynscope

@@ -6,6 +6,8 @@
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/model/conv_implementation.h"
+#include "engine/model/fused_point_conv.h"
 
 namespace dynscope {
 
@@ -35,9 +37,27 @@ PointConvImpl::PointConvImpl(const PointConvOptions& options) : options_(options
 
 torch::Tensor PointConvImpl::filter_weights(const torch::Tensor& query, const torch::Tensor& source,
                                             const NeighborTensors& neighbors) {
-  const torch::Tensor rel =
-      relative_positions(query, source, neighbors.index, options_.position_scale());
+  const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
   return weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);
+}
+
+torch::Tensor PointConvImpl::forward_unfused(const torch::Tensor& query,
+                                             const torch::Tensor& source,
+                                             const torch::Tensor& features,
+                                             const NeighborTensors& neighbors) {
+  const int64_t m = neighbors.index.size(0);
+  const torch::Tensor rel =
+      ((gather_neighbors(source, neighbors.index) - query.unsqueeze(1)) / options_.position_scale())
+          .to(torch::kFloat);
+  torch::Tensor x = gather_neighbors(features, neighbors.index);  // [M,K,C_in]
+  if (pos_embed) x = torch::cat({x, pos_embed->forward(rel)}, -1);
+  const torch::Tensor h =
+      weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);  // [M,K,c_mid]
+  torch::Tensor agg = torch::matmul(h.transpose(1, 2), x);  // [M,c_mid,C]: Σ_k h_k x_kᵀ
+  const torch::Tensor count = neighbors.mask.sum(1).to(torch::kFloat);
+  if (options_.normalize()) agg = agg / count.clamp_min(1.0).view({m, 1, 1});
+  const torch::Tensor y = linear->forward(agg.reshape({m, agg.size(1) * agg.size(2)}));
+  return y * (count > 0).to(torch::kFloat).unsqueeze(1);
 }
 
 torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Tensor& source,
@@ -48,19 +68,18 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
                      "expected features [N," + std::to_string(options_.in_channels()) + "], got " +
                          std::to_string(features.dim() == 2 ? features.size(1) : -1) + " channels");
   }
-  const int64_t m = neighbors.index.size(0);
-  const torch::Tensor rel =
-      relative_positions(query, source, neighbors.index, options_.position_scale());
-  torch::Tensor x = gather_neighbors(features, neighbors.index);  // [M,K,C_in]
-  if (pos_embed) x = torch::cat({x, pos_embed->forward(rel)}, -1);
-  const torch::Tensor h =
-      weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);  // [M,K,c_mid]
-  torch::Tensor agg = torch::matmul(h.transpose(1, 2), x);  // [M,c_mid,C]: Σ_k h_k x_kᵀ
-  const torch::Tensor count = neighbors.valid_count();
-  if (options_.normalize()) agg = agg / count.clamp_min(1.0).view({m, 1, 1});
-  const torch::Tensor y = linear->forward(agg.reshape({m, agg.size(1) * agg.size(2)}));
+  if (conv_implementation() == ConvImplementation::kUnfused) {
+    return forward_unfused(query, source, features, neighbors);
+  }
+  const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
+  const torch::Tensor edge = pos_embed ? pos_embed->forward(rel) : torch::Tensor();
+  // The fused op skips masked neighbours, so h needs no mask here.
+  const torch::Tensor h = weightnet->forward(rel);  // [M,K,c_mid]
+  torch::Tensor agg =
+      point_conv_aggregate(features, edge, h, masked_index(neighbors));  // [M,c_mid·C]
+  if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);
   // Without neighbours there is nothing to convolve: the bias must not leak into the output.
-  return y * (count > 0).to(torch::kFloat).unsqueeze(1);
+  return linear->forward(agg) * neighbors.has_neighbors();
 }
 
 }  // namespace dynscope

@@ -54,6 +54,10 @@ class PointConvImpl : public torch::nn::Module {
   torch::nn::Linear linear{nullptr};
 
  private:
+  // The unfused reference formulation (ConvImplementation::kUnfused).
+  torch::Tensor forward_unfused(const torch::Tensor& query, const torch::Tensor& source,
+                                const torch::Tensor& features, const NeighborTensors& neighbors);
+
   PointConvOptions options_;
 };
 TORCH_MODULE(PointConv);

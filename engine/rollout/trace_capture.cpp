@@ -149,7 +149,9 @@ ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& 
     for (ConvSite& s : sites) {
       const int row = rep[static_cast<size_t>(s.level)];
       if (row < 0 || row >= s.neighbors.rows()) continue;
-      NeighborTensors one{s.neighbors.index.narrow(0, row, 1), s.neighbors.mask.narrow(0, row, 1)};
+      NeighborTensors one;
+      one.index = s.neighbors.index.narrow(0, row, 1);
+      one.mask = s.neighbors.mask.narrow(0, row, 1);
       const torch::Tensor w = s.conv->filter_weights(s.query.narrow(0, row, 1), s.source, one)
                                   .squeeze(0)
                                   .to(torch::kDouble)

@@ -1,0 +1,361 @@
+// Fused PointConv aggregation and message gather: CPU kernels parallel over query points, with
+// hand-written backward passes (LibTorch's bmm on M tiny matrices dispatches one matrix at a time).
+#include "engine/model/fused_point_conv.h"
+
+#include <ATen/Dispatch.h>
+#include <ATen/Parallel.h>
+#include <torch/autograd.h>
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "engine/core/error.h"
+#include "engine/model/conv_implementation.h"
+
+namespace dynscope {
+namespace {
+
+using torch::autograd::AutogradContext;
+using torch::autograd::tensor_list;
+
+// Query rows per parallel task: large enough that scheduling costs nothing next to the work.
+constexpr int64_t kGrain = 64;
+
+std::string shape(const torch::Tensor& t) {
+  if (!t.defined()) return "undefined";
+  std::string s = "[";
+  for (int64_t d = 0; d < t.dim(); ++d) s += (d ? "," : "") + std::to_string(t.size(d));
+  return s + "]";
+}
+
+void check_index(const torch::Tensor& index, int64_t m, int64_t k, const char* op) {
+  if (index.scalar_type() != torch::kInt64 || index.dim() != 2 || index.size(0) != m ||
+      index.size(1) != k) {
+    throw ValueError(op, "index must be int64 [" + std::to_string(m) + "," + std::to_string(k) +
+                             "], got " + shape(index));
+  }
+}
+
+void check_float(const torch::Tensor& t, torch::ScalarType dtype, const char* what,
+                 const char* op) {
+  if (t.scalar_type() != dtype || !t.device().is_cpu()) {
+    throw ValueError(op, std::string(what) + " must be a CPU tensor of the features' dtype");
+  }
+}
+
+// Splits [0, m) into one contiguous range per worker, so each worker can own a scatter buffer.
+struct Partition {
+  int64_t parts;
+  int64_t rows;
+  int64_t begin(int64_t p) const { return std::min(rows, p * ((rows + parts - 1) / parts)); }
+  int64_t end(int64_t p) const { return begin(p + 1); }
+};
+
+Partition partition(int64_t rows) {
+  const int64_t threads = std::max<int64_t>(1, at::get_num_threads());
+  return {std::max<int64_t>(1, std::min(threads, (rows + kGrain - 1) / kGrain)), rows};
+}
+
+// out[m, j·C' + c] = Σ_k h[m,k,j] x[m,k,c], x = [features[idx]; edge].
+template <typename T>
+void aggregate_forward(const T* features, const T* edge, const T* h, const int64_t* index, T* out,
+                       int64_t m, int64_t k, int64_t c, int64_t p, int64_t j) {
+  const int64_t ct = c + p;
+  at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+    std::vector<T> x(static_cast<size_t>(ct));
+    for (int64_t q = begin; q < end; ++q) {
+      T* o = out + q * j * ct;
+      std::fill(o, o + j * ct, T(0));
+      for (int64_t n = 0; n < k; ++n) {
+        const int64_t e = q * k + n;
+        const int64_t src = index[e];
+        if (src < 0) continue;
+        std::copy(features + src * c, features + (src + 1) * c, x.data());
+        std::copy(edge + e * p, edge + (e + 1) * p, x.data() + c);
+        const T* hk = h + e * j;
+        for (int64_t jj = 0; jj < j; ++jj) {
+          const T a = hk[jj];
+          T* row = o + jj * ct;
+          for (int64_t cc = 0; cc < ct; ++cc) row[cc] += a * x[static_cast<size_t>(cc)];
+        }
+      }
+    }
+  });
+}
+
+// Gradients of aggregate_forward. d_features is scattered into one buffer per worker (`buffers`
+// `[parts,N,C]`) so no two threads write the same row; the caller sums them.
+template <typename T>
+void aggregate_backward(const T* features, const T* edge, const T* h, const int64_t* index,
+                        const T* grad, T* d_buffers, T* d_edge, T* d_h, int64_t n_src, int64_t m,
+                        int64_t k, int64_t c, int64_t p, int64_t j, const Partition& part) {
+  const int64_t ct = c + p;
+  at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
+    std::vector<T> x(static_cast<size_t>(ct)), dx(static_cast<size_t>(ct));
+    for (int64_t w = first; w < last; ++w) {
+      T* d_feat = d_buffers ? d_buffers + w * n_src * c : nullptr;
+      for (int64_t q = part.begin(w); q < part.end(w); ++q) {
+        const T* g = grad + q * j * ct;
+        for (int64_t n = 0; n < k; ++n) {
+          const int64_t e = q * k + n;
+          const int64_t src = index[e];
+          if (src < 0) {
+            if (d_h) std::fill(d_h + e * j, d_h + (e + 1) * j, T(0));
+            if (d_edge) std::fill(d_edge + e * p, d_edge + (e + 1) * p, T(0));
+            continue;
+          }
+          const T* hk = h + e * j;
+          if (d_h) {
+            std::copy(features + src * c, features + (src + 1) * c, x.data());
+            std::copy(edge + e * p, edge + (e + 1) * p, x.data() + c);
+            for (int64_t jj = 0; jj < j; ++jj) {
+              const T* row = g + jj * ct;
+              T s = 0;
+              for (int64_t cc = 0; cc < ct; ++cc) s += row[cc] * x[static_cast<size_t>(cc)];
+              d_h[e * j + jj] = s;
+            }
+          }
+          if (d_feat || d_edge) {
+            std::fill(dx.begin(), dx.end(), T(0));
+            for (int64_t jj = 0; jj < j; ++jj) {
+              const T a = hk[jj];
+              const T* row = g + jj * ct;
+              for (int64_t cc = 0; cc < ct; ++cc) dx[static_cast<size_t>(cc)] += a * row[cc];
+            }
+            if (d_feat) {
+              T* dst = d_feat + src * c;
+              for (int64_t cc = 0; cc < c; ++cc) dst[cc] += dx[static_cast<size_t>(cc)];
+            }
+            if (d_edge) std::copy(dx.data() + c, dx.data() + ct, d_edge + e * p);
+          }
+        }
+      }
+    }
+  });
+}
+
+struct AggregateFunction : torch::autograd::Function<AggregateFunction> {
+  static torch::Tensor forward(AutogradContext* ctx, torch::Tensor features, torch::Tensor edge,
+                               torch::Tensor h, torch::Tensor index) {
+    features = features.contiguous();
+    edge = edge.contiguous();
+    h = h.contiguous();
+    index = index.contiguous();
+    const int64_t m = h.size(0), k = h.size(1), j = h.size(2);
+    const int64_t c = features.size(1), p = edge.size(2);
+    torch::Tensor out = torch::empty({m, j * (c + p)}, features.options());
+    AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "point_conv_aggregate", [&] {
+      aggregate_forward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
+                                  h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
+                                  out.data_ptr<scalar_t>(), m, k, c, p, j);
+    });
+    ctx->save_for_backward({features, edge, h, index});
+    return out;
+  }
+
+  static tensor_list backward(AutogradContext* ctx, tensor_list grads) {
+    const auto saved = ctx->get_saved_variables();
+    const torch::Tensor &features = saved[0], &edge = saved[1], &h = saved[2], &index = saved[3];
+    const torch::Tensor grad = grads[0].contiguous();
+    const int64_t m = h.size(0), k = h.size(1), j = h.size(2);
+    const int64_t n_src = features.size(0), c = features.size(1), p = edge.size(2);
+    const bool want_feat = ctx->needs_input_grad(0), want_edge = ctx->needs_input_grad(1),
+               want_h = ctx->needs_input_grad(2);
+    const Partition part = partition(m);
+    torch::Tensor buffers, d_edge, d_h;
+    if (want_feat) buffers = torch::zeros({part.parts, n_src, c}, features.options());
+    if (want_edge) d_edge = torch::empty_like(edge);
+    if (want_h) d_h = torch::empty_like(h);
+    AT_DISPATCH_FLOATING_TYPES(features.scalar_type(), "point_conv_aggregate_backward", [&] {
+      auto ptr = [](torch::Tensor& t) { return t.defined() ? t.data_ptr<scalar_t>() : nullptr; };
+      aggregate_backward<scalar_t>(features.data_ptr<scalar_t>(), edge.data_ptr<scalar_t>(),
+                                   h.data_ptr<scalar_t>(), index.data_ptr<int64_t>(),
+                                   grad.data_ptr<scalar_t>(), ptr(buffers), ptr(d_edge), ptr(d_h),
+                                   n_src, m, k, c, p, j, part);
+    });
+    torch::Tensor d_features;
+    if (want_feat) d_features = part.parts == 1 ? buffers[0] : buffers.sum(0);
+    return {d_features, d_edge, d_h, torch::Tensor()};
+  }
+};
+
+// out[m,k] = q[m] + s[idx] + r[m,k] (0 where idx < 0).
+template <typename T>
+void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index, T* out, int64_t m,
+                        int64_t k, int64_t hdim) {
+  at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+    for (int64_t row = begin; row < end; ++row) {
+      const T* qr = q + row * hdim;
+      for (int64_t n = 0; n < k; ++n) {
+        const int64_t e = row * k + n;
+        T* o = out + e * hdim;
+        const int64_t src = index[e];
+        if (src < 0) {
+          std::fill(o, o + hdim, T(0));
+          continue;
+        }
+        const T* sr = s + src * hdim;
+        if (r) {
+          const T* rr = r + e * hdim;
+          for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c] + rr[c];
+        } else {
+          for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c];
+        }
+      }
+    }
+  });
+}
+
+template <typename T>
+void gather_add_backward(const T* grad, const int64_t* index, T* d_q, T* d_buffers, T* d_r,
+                         int64_t n_src, int64_t m, int64_t k, int64_t hdim, const Partition& part) {
+  at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
+    for (int64_t w = first; w < last; ++w) {
+      T* d_s = d_buffers ? d_buffers + w * n_src * hdim : nullptr;
+      for (int64_t row = part.begin(w); row < part.end(w); ++row) {
+        if (d_q) std::fill(d_q + row * hdim, d_q + (row + 1) * hdim, T(0));
+        for (int64_t n = 0; n < k; ++n) {
+          const int64_t e = row * k + n;
+          const T* g = grad + e * hdim;
+          const int64_t src = index[e];
+          if (src < 0) {
+            if (d_r) std::fill(d_r + e * hdim, d_r + (e + 1) * hdim, T(0));
+            continue;
+          }
+          if (d_q) {
+            for (int64_t c = 0; c < hdim; ++c) d_q[row * hdim + c] += g[c];
+          }
+          if (d_s) {
+            for (int64_t c = 0; c < hdim; ++c) d_s[src * hdim + c] += g[c];
+          }
+          if (d_r) std::copy(g, g + hdim, d_r + e * hdim);
+        }
+      }
+    }
+  });
+}
+
+struct GatherAddFunction : torch::autograd::Function<GatherAddFunction> {
+  static torch::Tensor forward(AutogradContext* ctx, torch::Tensor q, torch::Tensor s,
+                               torch::Tensor r, torch::Tensor index) {
+    q = q.contiguous();
+    s = s.contiguous();
+    index = index.contiguous();
+    const bool has_r = r.numel() > 0;
+    if (has_r) r = r.contiguous();
+    const int64_t m = index.size(0), k = index.size(1), hdim = q.size(1);
+    torch::Tensor out = torch::empty({m, k, hdim}, q.options());
+    AT_DISPATCH_FLOATING_TYPES(q.scalar_type(), "gather_add", [&] {
+      gather_add_forward<scalar_t>(q.data_ptr<scalar_t>(), s.data_ptr<scalar_t>(),
+                                   has_r ? r.data_ptr<scalar_t>() : nullptr,
+                                   index.data_ptr<int64_t>(), out.data_ptr<scalar_t>(), m, k, hdim);
+    });
+    ctx->save_for_backward({index});
+    ctx->saved_data["n_src"] = s.size(0);
+    ctx->saved_data["has_r"] = has_r;
+    return out;
+  }
+
+  static tensor_list backward(AutogradContext* ctx, tensor_list grads) {
+    const torch::Tensor index = ctx->get_saved_variables()[0];
+    const int64_t n_src = ctx->saved_data["n_src"].toInt();
+    const bool has_r = ctx->saved_data["has_r"].toBool();
+    const torch::Tensor grad = grads[0].contiguous();
+    const int64_t m = index.size(0), k = index.size(1), hdim = grad.size(2);
+    const Partition part = partition(m);
+    torch::Tensor d_q, buffers, d_r;
+    if (ctx->needs_input_grad(0)) d_q = torch::empty({m, hdim}, grad.options());
+    if (ctx->needs_input_grad(1)) buffers = torch::zeros({part.parts, n_src, hdim}, grad.options());
+    if (has_r && ctx->needs_input_grad(2)) d_r = torch::empty({m, k, hdim}, grad.options());
+    AT_DISPATCH_FLOATING_TYPES(grad.scalar_type(), "gather_add_backward", [&] {
+      auto ptr = [](torch::Tensor& t) { return t.defined() ? t.data_ptr<scalar_t>() : nullptr; };
+      gather_add_backward<scalar_t>(grad.data_ptr<scalar_t>(), index.data_ptr<int64_t>(), ptr(d_q),
+                                    ptr(buffers), ptr(d_r), n_src, m, k, hdim, part);
+    });
+    torch::Tensor d_s;
+    if (buffers.defined()) d_s = part.parts == 1 ? buffers[0] : buffers.sum(0);
+    return {d_q, d_s, d_r, torch::Tensor()};
+  }
+};
+
+void check_index_range(const torch::Tensor& index, int64_t n_src, const char* op) {
+  if (index.numel() == 0) return;
+  const int64_t hi = index.max().item<int64_t>(), lo = index.min().item<int64_t>();
+  if (hi >= n_src || lo < -1) {
+    throw ValueError(op, "index out of range [-1, " + std::to_string(n_src) + "): holds " +
+                             std::to_string(lo) + ".." + std::to_string(hi));
+  }
+}
+
+std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
+
+}  // namespace
+
+ConvImplementation conv_implementation() { return g_implementation.load(); }
+
+void set_conv_implementation(ConvImplementation implementation) {
+  g_implementation.store(implementation);
+}
+
+torch::Tensor masked_index(const NeighborTensors& neighbors) {
+  // A prepared list already holds −1 wherever its mask is false.
+  if (neighbors.rel.defined()) return neighbors.index;
+  return torch::where(neighbors.mask, neighbors.index, torch::full_like(neighbors.index, -1));
+}
+
+torch::Tensor point_conv_aggregate(const torch::Tensor& features, const torch::Tensor& edge,
+                                   const torch::Tensor& h, const torch::Tensor& index) {
+  const char* op = "point_conv_aggregate";
+  if (features.dim() != 2 || h.dim() != 3) {
+    throw ValueError(
+        op, "features must be [N,C] and h [M,K,J], got " + shape(features) + " and " + shape(h));
+  }
+  const auto dtype = features.scalar_type();
+  if (dtype != torch::kFloat && dtype != torch::kDouble) {
+    throw ValueError(op, "features must be float32 or float64");
+  }
+  check_float(features, dtype, "features", op);
+  check_float(h, dtype, "h", op);
+  const int64_t m = h.size(0), k = h.size(1);
+  check_index(index, m, k, op);
+  torch::Tensor e = edge;
+  if (!e.defined()) {
+    e = torch::empty({m, k, 0}, features.options());
+  } else if (e.dim() != 3 || e.size(0) != m || e.size(1) != k) {
+    throw ValueError(op, "edge must be [" + std::to_string(m) + "," + std::to_string(k) +
+                             ",P], got " + shape(e));
+  }
+  check_float(e, dtype, "edge", op);
+  check_index_range(index, features.size(0), op);
+  return AggregateFunction::apply(features, e, h, index);
+}
+
+torch::Tensor gather_add(const torch::Tensor& q, const torch::Tensor& s, const torch::Tensor& r,
+                         const torch::Tensor& index) {
+  const char* op = "gather_add";
+  if (q.dim() != 2 || s.dim() != 2 || q.size(1) != s.size(1)) {
+    throw ValueError(op, "q [M,H] and s [N,H] must share H, got " + shape(q) + " and " + shape(s));
+  }
+  const auto dtype = q.scalar_type();
+  if (dtype != torch::kFloat && dtype != torch::kDouble) {
+    throw ValueError(op, "inputs must be float32 or float64");
+  }
+  check_float(q, dtype, "q", op);
+  check_float(s, dtype, "s", op);
+  check_index(index, q.size(0), index.dim() == 2 ? index.size(1) : -1, op);
+  torch::Tensor rr = r;
+  if (!rr.defined()) {
+    rr = torch::empty({0}, q.options());
+  } else {
+    if (rr.dim() != 3 || rr.size(0) != q.size(0) || rr.size(1) != index.size(1) ||
+        rr.size(2) != q.size(1)) {
+      throw ValueError(op, "r must be [M,K,H], got " + shape(rr));
+    }
+    check_float(rr, dtype, "r", op);
+  }
+  check_index_range(index, s.size(0), op);
+  return GatherAddFunction::apply(q, s, rr, index);
+}
+
+}  // namespace dynscope

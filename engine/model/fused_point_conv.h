@@ -1,0 +1,31 @@
+// Fused PointConv aggregation Σ_k h_k ⊗ x_k over a neighbour list, with a hand-written backward.
+#pragma once
+
+#include <torch/types.h>
+
+#include "engine/model/neighbor_tensors.h"
+
+namespace dynscope {
+
+/// The aggregation of the efficient PointConv (paper eq. 2) as one op, parallel over query points:
+///   out[m, j·C' + c] = Σ_k h[m,k,j] · x_{m,k}[c],   x_{m,k} = [features[index[m,k]] ; edge[m,k]]
+/// with C' = C + P. `features` `[N,C]`, `edge` `[M,K,P]` per-neighbour channels (e.g. the
+/// positional embedding; undefined for none), `h` `[M,K,J]` filter weights, `index` int64 `[M,K]`
+/// into features with −1 for masked entries, which contribute nothing and get zero gradient.
+/// Float32 or float64 (all floating inputs of one dtype), CPU. Returns `[M, J·C']`; differentiable
+/// in features, edge and h without materialising the `[M,K,C']` gather. Throws ValueError on
+/// shape, dtype or index mismatch.
+torch::Tensor point_conv_aggregate(const torch::Tensor& features, const torch::Tensor& edge,
+                                   const torch::Tensor& h, const torch::Tensor& index);
+
+/// Gathered edge inputs for message passing, as one op: out[m,k] = q[m] + s[index[m,k]] + r[m,k]
+/// for valid entries and 0 where index is −1. `q` `[M,H]`, `s` `[N,H]`, `r` `[M,K,H]` (undefined:
+/// none). Float32 or float64, CPU; differentiable in q, s and r. Throws ValueError on mismatch.
+torch::Tensor gather_add(const torch::Tensor& q, const torch::Tensor& s, const torch::Tensor& r,
+                         const torch::Tensor& index);
+
+/// The list's index with −1 wherever its mask is false (the form the fused ops read); prepared
+/// lists are returned as they are (prepare() writes them in that form).
+torch::Tensor masked_index(const NeighborTensors& neighbors);
+
+}  // namespace dynscope

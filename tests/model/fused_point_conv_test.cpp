@@ -1,0 +1,259 @@
+// Fused ops against the unfused formulation (gather, mask, batched matmul) and finite differences;
+// PointConv and GnnConv against their unfused reference formulation (ConvImplementation).
+#include "engine/model/fused_point_conv.h"
+
+#include <ATen/Parallel.h>
+#include <gtest/gtest.h>
+#include <torch/autograd.h>
+#include <torch/nn/functional/activation.h>
+#include <torch/nn/modules/linear.h>
+
+#include <functional>
+#include <vector>
+
+#include "engine/core/error.h"
+#include "engine/model/conv_implementation.h"
+#include "engine/model/gnn_conv.h"
+#include "engine/model/neighbor_tensors.h"
+#include "engine/model/point_conv.h"
+
+namespace dynscope {
+namespace {
+
+struct Inputs {
+  torch::Tensor features, edge, h, index, mask;
+};
+
+// Random inputs with masked entries (−1), one row without any valid neighbour, and repeated
+// sources (so the backward scatter accumulates several contributions into one row).
+Inputs make_inputs(int64_t n, int64_t m, int64_t k, int64_t c, int64_t p, int64_t j,
+                   torch::ScalarType dtype, uint64_t seed) {
+  torch::manual_seed(seed);
+  Inputs in;
+  const auto opt = torch::TensorOptions(dtype);
+  in.features = torch::randn({n, c}, opt);
+  in.edge = p > 0 ? torch::randn({m, k, p}, opt) : torch::Tensor();
+  in.h = torch::randn({m, k, j}, opt);
+  in.mask = torch::rand({m, k}) > 0.3;
+  in.mask[0] = false;
+  in.index = torch::where(in.mask, torch::randint(0, n, {m, k}, torch::kInt64),
+                          torch::full({m, k}, -1, torch::kInt64));
+  return in;
+}
+
+// The unfused formulation the fused op replaces: gather, concatenate, mask h, batched matmul.
+torch::Tensor reference_aggregate(const torch::Tensor& features, const torch::Tensor& edge,
+                                  const torch::Tensor& h, const torch::Tensor& index,
+                                  const torch::Tensor& mask) {
+  torch::Tensor x = gather_neighbors(features, index);
+  if (edge.defined()) x = torch::cat({x, edge}, -1);
+  const torch::Tensor hm = h * mask.unsqueeze(-1).to(h.scalar_type());
+  const torch::Tensor agg = torch::matmul(hm.transpose(1, 2), x);
+  return agg.reshape({h.size(0), agg.size(1) * agg.size(2)});
+}
+
+std::vector<torch::Tensor> grads_of(const torch::Tensor& out, const torch::Tensor& weight,
+                                    std::vector<torch::Tensor> wrt) {
+  std::vector<torch::Tensor> defined;
+  for (const auto& t : wrt)
+    if (t.defined()) defined.push_back(t);
+  return torch::autograd::grad({(out * weight).sum()}, defined);
+}
+
+TEST(FusedPointConvTest, AggregateMatchesUnfusedForwardAndGradientsInFloat) {
+  for (int64_t p : {0, 4}) {
+    Inputs in = make_inputs(40, 25, 7, 6, p, 5, torch::kFloat, 1 + p);
+    for (torch::Tensor* t : {&in.features, &in.edge, &in.h}) {
+      if (t->defined()) t->requires_grad_(true);
+    }
+    const torch::Tensor fused = point_conv_aggregate(in.features, in.edge, in.h, in.index);
+    const torch::Tensor ref = reference_aggregate(in.features, in.edge, in.h, in.index, in.mask);
+    ASSERT_EQ(fused.sizes(), ref.sizes());
+    EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
+    EXPECT_TRUE(torch::equal(fused[0], torch::zeros_like(fused[0])));
+    const torch::Tensor w = torch::randn_like(ref);
+    const auto gf = grads_of(fused, w, {in.features, in.edge, in.h});
+    const auto gr = grads_of(ref, w, {in.features, in.edge, in.h});
+    ASSERT_EQ(gf.size(), gr.size());
+    for (size_t i = 0; i < gf.size(); ++i) {
+      EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-5, 1e-5))
+          << "gradient " << i << " differs by " << (gf[i] - gr[i]).abs().max();
+    }
+  }
+}
+
+// Central differences of sum(w · f(x)) against the analytic gradient, every element, in double
+// (what torch.autograd.gradcheck does for one random output weighting).
+void expect_gradcheck(const std::function<torch::Tensor(const std::vector<torch::Tensor>&)>& f,
+                      std::vector<torch::Tensor> inputs) {
+  for (auto& t : inputs) t.requires_grad_(true);
+  const torch::Tensor out = f(inputs);
+  const torch::Tensor w = torch::randn_like(out);
+  const auto analytic = torch::autograd::grad({(out * w).sum()}, inputs);
+  const double eps = 1e-6;
+  torch::NoGradGuard no_grad;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    torch::Tensor x = inputs[i].detach().clone();
+    std::vector<torch::Tensor> probe = inputs;
+    auto flat = x.view({-1});
+    torch::Tensor numeric = torch::zeros_like(flat);
+    for (int64_t e = 0; e < flat.numel(); ++e) {
+      const double v = flat[e].item<double>();
+      flat[e] = v + eps;
+      probe[i] = x;
+      const double up = (f(probe) * w).sum().item<double>();
+      flat[e] = v - eps;
+      const double down = (f(probe) * w).sum().item<double>();
+      flat[e] = v;
+      numeric[e] = (up - down) / (2 * eps);
+    }
+    EXPECT_TRUE(torch::allclose(analytic[i].reshape({-1}), numeric, 1e-6, 1e-7))
+        << "input " << i << ": max difference "
+        << (analytic[i].reshape({-1}) - numeric).abs().max();
+  }
+}
+
+TEST(FusedPointConvTest, AggregatePassesGradcheckInDouble) {
+  const Inputs in = make_inputs(6, 4, 3, 2, 2, 3, torch::kDouble, 7);
+  expect_gradcheck(
+      [&](const std::vector<torch::Tensor>& v) {
+        return point_conv_aggregate(v[0], v[1], v[2], in.index);
+      },
+      {in.features, in.edge, in.h});
+}
+
+TEST(FusedPointConvTest, ResultDoesNotDependOnThreadCount) {
+  const Inputs in = make_inputs(500, 400, 9, 8, 4, 6, torch::kFloat, 3);
+  const int before = at::get_num_threads();
+  at::set_num_threads(1);
+  const torch::Tensor one = point_conv_aggregate(in.features, in.edge, in.h, in.index);
+  at::set_num_threads(2);
+  const torch::Tensor two = point_conv_aggregate(in.features, in.edge, in.h, in.index);
+  at::set_num_threads(before);
+  EXPECT_TRUE(torch::equal(one, two));
+}
+
+TEST(FusedPointConvTest, AggregateRejectsBadInputs) {
+  const Inputs in = make_inputs(10, 5, 3, 4, 2, 3, torch::kFloat, 4);
+  torch::Tensor far = in.index.clone();
+  far[1][0] = 10;
+  EXPECT_THROW(point_conv_aggregate(in.features, in.edge, in.h, far), ValueError);
+  EXPECT_THROW(point_conv_aggregate(in.features, in.edge, in.h.to(torch::kDouble), in.index),
+               ValueError);
+  EXPECT_THROW(point_conv_aggregate(in.features, in.edge.narrow(0, 0, 4), in.h, in.index),
+               ValueError);
+  EXPECT_THROW(point_conv_aggregate(in.features, in.edge, in.h, in.index.to(torch::kInt32)),
+               ValueError);
+}
+
+torch::Tensor reference_gather_add(const torch::Tensor& q, const torch::Tensor& s,
+                                   const torch::Tensor& r, const torch::Tensor& mask,
+                                   const torch::Tensor& index) {
+  const torch::Tensor sum = q.unsqueeze(1) + gather_neighbors(s, index) + r;
+  return sum * mask.unsqueeze(-1).to(q.scalar_type());
+}
+
+TEST(FusedPointConvTest, GatherAddMatchesUnfusedAndPassesGradcheck) {
+  Inputs in = make_inputs(30, 20, 5, 1, 0, 1, torch::kFloat, 5);
+  torch::Tensor q = torch::randn({20, 6}).requires_grad_(true);
+  torch::Tensor s = torch::randn({30, 6}).requires_grad_(true);
+  torch::Tensor r = torch::randn({20, 5, 6}).requires_grad_(true);
+  const torch::Tensor fused = gather_add(q, s, r, in.index);
+  const torch::Tensor ref = reference_gather_add(q, s, r, in.mask, in.index);
+  EXPECT_TRUE(torch::allclose(fused, ref, 1e-6, 1e-6));
+  const torch::Tensor w = torch::randn_like(ref);
+  const auto gf = grads_of(fused, w, {q, s, r});
+  const auto gr = grads_of(ref, w, {q, s, r});
+  for (size_t i = 0; i < gf.size(); ++i) {
+    EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-5, 1e-5)) << "gradient " << i;
+  }
+  const Inputs small = make_inputs(5, 4, 3, 1, 0, 1, torch::kDouble, 6);
+  expect_gradcheck(
+      [&](const std::vector<torch::Tensor>& v) {
+        return gather_add(v[0], v[1], v[2], small.index);
+      },
+      {torch::randn({4, 2}, torch::kDouble), torch::randn({5, 2}, torch::kDouble),
+       torch::randn({4, 3, 2}, torch::kDouble)});
+}
+
+// Runs the neighbour convolutions on the unfused reference formulation while alive.
+struct UnfusedScope {
+  UnfusedScope() { set_conv_implementation(ConvImplementation::kUnfused); }
+  ~UnfusedScope() { set_conv_implementation(ConvImplementation::kFused); }
+};
+
+struct ConvCase {
+  torch::Tensor query, source, features;
+  NeighborTensors nb;
+};
+
+ConvCase make_conv_case(int64_t n, int64_t m, int64_t k, int64_t c, uint64_t seed) {
+  const Inputs in = make_inputs(n, m, k, c, 0, 1, torch::kFloat, seed);
+  ConvCase cs;
+  cs.source = torch::rand({n, 3}, torch::kFloat64) * 0.3 + 100.0;  // far from the origin
+  cs.query = torch::rand({m, 3}, torch::kFloat64) * 0.3 + 100.0;
+  cs.features = in.features.clone().requires_grad_(true);
+  cs.nb.index = in.index;
+  cs.nb.mask = in.mask;
+  return cs;
+}
+
+void expect_same_gradients(torch::nn::Module& module, const torch::Tensor& fused,
+                           const torch::Tensor& ref, const torch::Tensor& features) {
+  const torch::Tensor w = torch::randn_like(ref);
+  std::vector<torch::Tensor> wrt = module.parameters();
+  wrt.push_back(features);
+  const auto gf = torch::autograd::grad({(fused * w).sum()}, wrt, {}, true, false, true);
+  const auto gr = torch::autograd::grad({(ref * w).sum()}, wrt, {}, true, false, true);
+  for (size_t i = 0; i < wrt.size(); ++i) {
+    const bool df = gf[i].defined(), dr = gr[i].defined();
+    if (!df && !dr) continue;
+    const torch::Tensor a = df ? gf[i] : torch::zeros_like(gr[i]);
+    const torch::Tensor b = dr ? gr[i] : torch::zeros_like(gf[i]);
+    EXPECT_TRUE(torch::allclose(a, b, 1e-5, 1e-5))
+        << "gradient of input " << i << " differs by " << (a - b).abs().max();
+  }
+}
+
+TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
+  for (bool normalize : {false, true}) {
+    for (int64_t pos : {0, 4}) {
+      ConvCase cs = make_conv_case(40, 30, 6, 5, normalize ? 11 : 12);
+      PointConv conv(
+          PointConvOptions(5, 7).c_mid(4).pos_channels(pos).normalize(normalize).position_scale(
+              0.25));
+      torch::Tensor ref;
+      {
+        UnfusedScope unfused;
+        ref = conv->forward(cs.query, cs.source, cs.features, cs.nb);
+      }
+      const torch::Tensor fused = conv->forward(cs.query, cs.source, cs.features, cs.nb);
+      EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
+      // The same through a prepared list (what a hierarchy's forward pass uses).
+      NeighborTensors prepared = cs.nb;
+      prepared.prepare(cs.query, cs.source);
+      const torch::Tensor again = conv->forward(cs.query, cs.source, cs.features, prepared);
+      EXPECT_TRUE(torch::allclose(again, ref, 1e-5, 1e-5)) << (again - ref).abs().max();
+      expect_same_gradients(*conv, fused, ref, cs.features);
+    }
+  }
+}
+
+TEST(FusedPointConvTest, GnnConvMatchesItsUnfusedFormulation) {
+  for (bool normalize : {false, true}) {
+    ConvCase cs = make_conv_case(35, 20, 5, 6, normalize ? 21 : 22);
+    GnnConv gnn(GnnConvOptions(6, 5).normalize(normalize).position_scale(0.5));
+    const torch::Tensor xq = torch::randn({20, 6}).requires_grad_(true);
+    torch::Tensor ref;
+    {
+      UnfusedScope unfused;
+      ref = gnn->forward(cs.query, cs.source, cs.features, xq, cs.nb);
+    }
+    const torch::Tensor fused = gnn->forward(cs.query, cs.source, cs.features, xq, cs.nb);
+    EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
+    expect_same_gradients(*gnn, fused, ref, cs.features);
+  }
+}
+
+}  // namespace
+}  // namespace dynscope
