@@ -10,8 +10,6 @@
 namespace dynscope::app::viewer {
 namespace {
 
-constexpr int kFirstTraceFrame = 2;  // the model's state reads p(t-2) (DESIGN §5)
-
 void draw_trace_features(const ModelTrace& trace, int level, int picked) {
   std::vector<float> norms;
   std::string names;
@@ -95,18 +93,58 @@ void neighbour_table(const char* id, const std::vector<NeighborEntry>& list, con
   }
 }
 
+// A picked rollout point: which set and frame, where both sets have it, and the error.
+void draw_rollout_point(const ViewerState& state, const Selection& picked, Actions& out) {
+  const RolloutDocument& doc =
+      picked.set == PickSet::kCompared ? *state.compared_rollout() : state.rollout();
+  const Rollout& r = doc.rollout;
+  const int f = std::min(state.current_frame(), doc.num_frames() - 1);
+  const auto i = static_cast<Eigen::Index>(picked.point);
+  ImGui::Text("point %d of the %s, frame %d", picked.point, pick_set_name(picked.set), f);
+  ImGui::SameLine();
+  if (ImGui::SmallButton("clear")) {
+    out.add([](ViewerState& s) { s.select_point(-1); });
+    return;
+  }
+  if (picked.frame != f) {
+    ImGui::TextColored(kMutedText, "picked at frame %d; points keep their identity", picked.frame);
+  }
+  const int32_t id = r.object_ids[static_cast<size_t>(i)];
+  std::string name;
+  if (doc.scene && doc.scene->object_index(id) >= 0) {
+    name = doc.scene->objects[static_cast<size_t>(doc.scene->object_index(id))].name;
+  }
+  const Vec3 predicted = r.predicted[static_cast<size_t>(f)].row(i).transpose();
+  const Vec3 truth = r.truth[static_cast<size_t>(f)].row(i).transpose();
+  ImGui::Text("object    %d %s", id, name.c_str());
+  ImGui::Text("predicted %s", format_vec(predicted).c_str());
+  ImGui::Text("truth     %s", format_vec(truth).c_str());
+  ImGui::Text("error     %.4f", (predicted - truth).norm());
+  if (f < r.observed_frames) {
+    ImGui::TextColored(kMutedText, "frame %d is observed: the prediction is the truth", f);
+  }
+}
+
 }  // namespace
 
 void draw_inspector_panel(const ViewerState& state, Actions& out) {
+  const Selection picked = state.selection();
+  if (picked.set == PickSet::kPrediction || picked.set == PickSet::kTruth ||
+      picked.set == PickSet::kCompared) {
+    draw_rollout_point(state, picked, out);
+    return;
+  }
   const ModelTrace* trace = state.shown_trace();
   const render::ViewSpec& view = state.view();
+  const int frame = state.level_frame();
+  if (!state.checkpoint().empty() && state.trace_frame() != view.frame) {
+    ImGui::TextWrapped(
+        "Frame %d is observed: the model reads frames t-2..t, so the inspector shows its trace "
+        "at frame %d, the first it can trace.",
+        view.frame, state.trace_frame());
+  }
   if (!state.checkpoint().empty() && !trace) {
-    if (view.frame < kFirstTraceFrame) {
-      ImGui::TextWrapped("The model reads frames t-2..t: its trace starts at frame %d.",
-                         kFirstTraceFrame);
-    } else {
-      ImGui::TextWrapped("Capturing the model's trace at frame %d...", view.frame);
-    }
+    ImGui::TextWrapped("Capturing the model's trace at frame %d...", state.trace_frame());
     return;
   }
   if (view.picked_point < 0) {
@@ -114,13 +152,14 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
     return;
   }
   const SceneDocument& doc = state.document();
-  if (view.frame >= doc.scene.num_frames()) return;
+  if (frame >= doc.scene.num_frames()) return;
   const render::SceneRenderData& data = *state.active_data();
   const PointInfo info = trace
                              ? inspect_trace_point(*trace, doc.scene, view.level, view.picked_point)
-                             : inspect_point(data, view.picked_point, view.frame);
-  ImGui::Text("point %d of level %d (%s point %d)", info.level_point, view.level,
-              trace ? "model" : "cloud", info.cloud_point);
+                             : inspect_point(data, view.picked_point, frame);
+  ImGui::Text("point %d of the %s of level %d, frame %d (%s point %d)", info.level_point,
+              pick_set_name(PickSet::kLevel), view.level, frame, trace ? "model" : "cloud",
+              info.cloud_point);
   ImGui::SameLine();
   if (ImGui::SmallButton("clear")) {
     out.add([](ViewerState& s) { s.select_point(-1); });
@@ -142,7 +181,7 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
     int k = view.neighbors;
     if (ImGui::SliderInt("k", &k, 1, 32)) out.add([k](ViewerState& s) { s.set_neighbors(k); });
   }
-  const Neighborhood n = point_neighborhood(data, view.picked_point, view.frame, view.neighbors);
+  const Neighborhood n = point_neighborhood(data, view.picked_point, frame, view.neighbors);
   const bool weighted = state.trace_picked() == view.picked_point;
   const ImVec4 blue(0.35f, 0.6f, 1.0f, 1.0f), orange(1.0f, 0.6f, 0.15f, 1.0f);
   ImGui::TextColored(blue, "object kNN: %zu of k=%d (same object)", n.object.size(), n.k);

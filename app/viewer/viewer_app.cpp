@@ -44,16 +44,15 @@ render::Image ViewerApp::read_pixels() {
 }
 
 bool ViewerApp::pick(int x, int y) {
-  const SceneDocument* doc = state_.scene_document();
-  if (!doc || state_.current_frame() >= doc->scene.num_frames()) return false;
   state_.ensure_render_data();
-  // With a checkpoint, points are picked from the model's own levels once its trace is there.
-  if (!state_.checkpoint().empty() && !state_.shown_trace()) return false;
   const std::vector<Viewport> ports = viewports();
-  const render::Camera& camera = ports[static_cast<size_t>(viewport_at(ports, x))].camera;
-  const render::PickResult hit = renderer_.pick(level_pick_scene(state_), camera, x, y);
+  if (ports.empty()) return false;
+  const Viewport& port = ports[static_cast<size_t>(viewport_at(ports, x))];
+  const PickScene target = pick_scene(state_, port);
+  if (target.scene.points.empty()) return false;
+  const render::PickResult hit = renderer_.pick(target.scene, port.camera, x, y);
   if (!hit.hit()) return false;
-  state_.select_point(hit.point);
+  state_.select(target.sets[static_cast<size_t>(hit.layer)], hit.point);
   return true;
 }
 

@@ -37,6 +37,22 @@ std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& ro
 
 }  // namespace
 
+const char* pick_set_name(PickSet set) {
+  switch (set) {
+    case PickSet::kLevel:
+      return "level points";
+    case PickSet::kPrediction:
+      return "prediction";
+    case PickSet::kTruth:
+      return "truth";
+    case PickSet::kCompared:
+      return "compared prediction";
+    case PickSet::kNone:
+      break;
+  }
+  return "";
+}
+
 float panel_width(const WindowLayout& layout) { return layout.ui_visible ? kPanelWidth : 0.0f; }
 
 float timeline_height(const WindowLayout& layout, bool has_rollout) {
@@ -54,6 +70,7 @@ ViewerState::~ViewerState() { cancel_jobs(); }
 void ViewerState::replaced() {
   ++generation_;
   cancel_jobs();
+  drawn_pick_ = Selection{};
 }
 
 void ViewerState::cancel_jobs() {
@@ -179,11 +196,19 @@ int ViewerState::observed_frames() const {
 void ViewerState::set_frame(int frame) {
   if (num_frames() == 0) return;
   const int clamped = std::clamp(frame, 0, num_frames() - 1);
+  const int traced = trace_frame();
+  view_.frame = clamped;
   // Level points of a model trace are the hierarchy of one frame; only level-0 points (the
   // model's points) keep their index from frame to frame.
-  if (clamped != view_.frame && !checkpoint_.empty() && view_.level > 0) view_.picked_point = -1;
-  view_.frame = clamped;
+  if (trace_frame() != traced && !checkpoint_.empty() && view_.level > 0) view_.picked_point = -1;
 }
+
+int ViewerState::trace_frame() const {
+  if (checkpoint_.empty()) return view_.frame;
+  return std::max(view_.frame, kFirstTraceFrame);
+}
+
+int ViewerState::level_frame() const { return shown_trace() ? trace_->frame : view_.frame; }
 
 void ViewerState::select_point(int point) {
   if (point >= 0) {
@@ -198,7 +223,38 @@ void ViewerState::select_point(int point) {
     view_.layers.neighborhoods = true;
     show_panel(Panel::kInspector);
   }
+  drawn_pick_ = Selection{};
   view_.picked_point = std::max(point, -1);
+}
+
+void ViewerState::select(PickSet set, int point) {
+  if (set == PickSet::kNone || point < 0) {
+    select_point(-1);
+    return;
+  }
+  if (set == PickSet::kLevel) {
+    select_point(point);
+    return;
+  }
+  const RolloutDocument* doc = set == PickSet::kCompared ? compare_.get() : rollout_.get();
+  if (!doc) {
+    throw ValueError("pick", std::string("no ") + pick_set_name(set) + " is shown");
+  }
+  const int n = static_cast<int>(doc->rollout.num_points());
+  if (point >= n) {
+    throw ValueError("picked_point", std::to_string(point) + " is outside the " +
+                                         std::to_string(n) + " points of the " +
+                                         pick_set_name(set));
+  }
+  view_.picked_point = -1;
+  drawn_pick_ = {set, point, view_.frame};
+  show_panel(Panel::kInspector);
+}
+
+Selection ViewerState::selection() const {
+  if (!drawn_pick_.empty()) return drawn_pick_;
+  if (view_.picked_point >= 0) return {PickSet::kLevel, view_.picked_point, level_frame()};
+  return {};
 }
 
 int ViewerState::num_levels() const { return kMaxLevel + 1; }
@@ -298,6 +354,7 @@ void ViewerState::set_compared_rollout(const Rollout& other, const std::string& 
                                              std::to_string(rollout_->num_frames()));
   }
   compare_ = make_rollout_document(other, label, rollout_->scene ? &*rollout_->scene : nullptr);
+  if (drawn_pick_.set == PickSet::kCompared) drawn_pick_ = Selection{};
   fit_camera();
 }
 
@@ -376,7 +433,7 @@ void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int lev
 }
 
 const ModelTrace* ViewerState::shown_trace() const {
-  if (!trace_ || !trace_data_ || trace_->frame != view_.frame || trace_level_ != view_.level) {
+  if (!trace_ || !trace_data_ || trace_->frame != trace_frame() || trace_level_ != view_.level) {
     return nullptr;
   }
   return trace_.get();
@@ -488,10 +545,10 @@ void ViewerState::update_jobs() {
     install_trace(trace_, view_.level, -1);
   }
   if (checkpoint_.empty() || !services_ || !doc_ || trace_job_ ||
-      view_.frame >= doc_->scene.num_frames() || view_.frame < kFirstTraceFrame) {
+      trace_frame() >= doc_->scene.num_frames()) {
     return;
   }
-  const TraceWant want{view_.frame, view_.level, view_.picked_point};
+  const TraceWant want{trace_frame(), view_.level, view_.picked_point};
   const bool have = trace_ && trace_->frame == want.frame && trace_level_ == want.level &&
                     trace_picked_ == want.picked;
   if (have || trace_failed_ == want) return;

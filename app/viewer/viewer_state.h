@@ -23,6 +23,22 @@ namespace dynscope::app::viewer {
 /// Collapsible sections of the side panel.
 enum class Panel { kFiles, kDisplay, kRollout, kModel, kObjects, kContacts, kLevels, kInspector };
 
+/// Which drawn point set a click selects from.
+enum class PickSet { kNone, kLevel, kPrediction, kTruth, kCompared };
+
+/// "level points", "prediction", "truth", "compared prediction" ("" for none).
+const char* pick_set_name(PickSet set);
+
+/// What the user selected: a point of one drawn set. Level points index the shown level (of the
+/// frame level_frame() gives); rollout points index the rollout's points (identity kept over
+/// frames, so the selection follows scrubbing).
+struct Selection {
+  PickSet set = PickSet::kNone;
+  int point = -1;  ///< Index into that set.
+  int frame = -1;  ///< Frame it was picked at.
+  bool empty() const { return set == PickSet::kNone; }
+};
+
 /// Playback state of the timeline.
 struct Timeline {
   bool playing = false;
@@ -164,8 +180,18 @@ class ViewerState {
   /// Moves the timeline to `frame` (clamped); no upload happens.
   void set_frame(int frame);
   int selected_point() const { return view_.picked_point; }
-  /// Selects level point `point` (-1 clears); throws ValueError if out of range.
+  /// Selects level point `point` (-1 clears any selection); throws ValueError if out of range.
   void select_point(int point);
+  /// Selects point `point` of the drawn set `set` at the current frame (kLevel: as select_point;
+  /// kNone clears). Throws ValueError for a set not shown or a point outside it.
+  void select(PickSet set, int point);
+  /// The current selection: a rollout point, the selected level point, or empty.
+  Selection selection() const;
+  /// Frame of the model trace the level browser and inspector read for the current frame: with a
+  /// checkpoint, an observed frame the model cannot trace gives the first frame it can.
+  int trace_frame() const;
+  /// Frame the level layers are drawn at: the shown trace's frame, else the current frame.
+  int level_frame() const;
   /// Sets the U-Net level shown and clears the selection; throws ValueError if out of range.
   void set_level(int level);
   /// Number of levels the browser offers (the model's, from its config or the trace).
@@ -237,6 +263,7 @@ class ViewerState {
   std::vector<std::unique_ptr<BackgroundJob<std::vector<Rollout>>>> retired_rollouts_;
   std::vector<std::unique_ptr<BackgroundJob<ModelTrace>>> retired_traces_;
   int dropped_ = 0;
+  Selection drawn_pick_;  ///< A selected rollout point (level points live in view_.picked_point).
   render::ViewSpec view_;
   int data_level_ = -1;  ///< Level doc_->data was built for.
   Timeline timeline_;

@@ -9,6 +9,25 @@
 namespace dynscope::app::viewer {
 namespace {
 
+// The set a rollout layer draws, told by its series (each document's series are built once).
+PickSet rollout_layer_set(const ViewerState& state, const render::PointLayer& layer) {
+  const RolloutDocument* a = state.rollout_document();
+  const RolloutDocument* b = state.compared_rollout();
+  if (a && layer.series == a->series.prediction) return PickSet::kPrediction;
+  if (a && layer.series == a->series.truth) return PickSet::kTruth;
+  if (b && layer.series == b->series.prediction) return PickSet::kCompared;
+  if (b && layer.series == b->series.truth) return PickSet::kTruth;  // the same scene's truth
+  return PickSet::kNone;
+}
+
+// Says when the level layers show another frame than the timeline (an observed frame the model
+// cannot trace shows the first frame it can).
+std::string level_caption(const ViewerState& state) {
+  if (state.level_frame() == state.current_frame()) return "";
+  return "model levels at frame " + std::to_string(state.level_frame()) +
+         " (the first the model can trace)";
+}
+
 // The level layers (points, voxels, neighbourhoods, interaction points) over a rollout frame.
 void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
   const render::ViewSpec& view = state.view();
@@ -20,29 +39,13 @@ void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
   }
   render::ViewSpec v = view;
   v.layers.grid = v.layers.meshes = v.layers.ground_truth = v.layers.prediction = false;
-  render::RenderScene levels = state.active_data()->frame(view.frame, v);
+  render::RenderScene levels = state.active_data()->frame(state.level_frame(), v);
   out.points.insert(out.points.end(), levels.points.begin(), levels.points.end());
   out.lines.insert(out.lines.end(), levels.lines.begin(), levels.lines.end());
   out.boxes.insert(out.boxes.end(), levels.boxes.begin(), levels.boxes.end());
 }
 
 }  // namespace
-
-const char* pick_set_name(PickSet set) {
-  switch (set) {
-    case PickSet::kLevel:
-      return "level points";
-    case PickSet::kPrediction:
-      return "prediction";
-    case PickSet::kTruth:
-      return "truth";
-    case PickSet::kCompared:
-      return "compared prediction";
-    case PickSet::kNone:
-      break;
-  }
-  return "";
-}
 
 render::ViewSpec rollout_view(const ViewerState& state, bool prediction, bool truth, bool ghost) {
   render::ViewSpec v = state.view();
@@ -73,8 +76,15 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
     render::ViewSpec v = view;
     // The selection indexes the model trace's level; without it there is nothing to show.
     if (!state.checkpoint().empty() && !state.shown_trace()) v.picked_point = -1;
-    Viewport p{state.active_data()->frame(view.frame, v), camera, full, ""};
-    p.pick_set = PickSet::kLevel;
+    Viewport p{
+        state.active_data()->frame(state.level_frame(), v), camera, full, level_caption(state), {}};
+    // The level's own layer is the selectable one; the rest (all points, edges) are context.
+    for (const render::PointLayer& l : p.scene.points) {
+      p.layer_sets.push_back(l.pickable && l.series &&
+                                     l.series->num_points == state.active_data()->level_size()
+                                 ? PickSet::kLevel
+                                 : PickSet::kNone);
+    }
     out.push_back(std::move(p));
     return out;
   }
@@ -82,7 +92,7 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
   const RolloutDocument* compare = state.compared_rollout();
   auto port = [&](const RolloutDocument& doc, const render::ViewSpec& v, const render::Camera& c,
                   render::Rect rect, std::string caption) {
-    out.push_back({render::rollout_frame(doc, f, v), c, rect, std::move(caption)});
+    out.push_back({render::rollout_frame(doc, f, v), c, rect, std::move(caption), {}});
   };
   switch (state.rollout_mode()) {
     case RolloutMode::kPrediction:
@@ -119,7 +129,49 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
       break;
     }
   }
-  add_scene_layers(state, out.back().scene);
+  for (Viewport& p : out) {
+    for (const render::PointLayer& l : p.scene.points) {
+      p.layer_sets.push_back(rollout_layer_set(state, l));
+    }
+  }
+  render::RenderScene& last = out.back().scene;
+  const size_t before = last.points.size();
+  add_scene_layers(state, last);
+  out.back().layer_sets.resize(last.points.size(), PickSet::kNone);
+  if (last.points.size() > before && out.back().caption.empty()) {
+    out.back().caption = level_caption(state);
+  }
+  return out;
+}
+
+PickScene pick_scene(const ViewerState& state, const Viewport& viewport) {
+  PickScene out;
+  out.scene = viewport.scene;
+  out.scene.points.clear();
+  out.scene.lines.clear();
+  out.scene.boxes.clear();
+  for (size_t i = 0; i < viewport.scene.points.size(); ++i) {
+    const PickSet set = viewport.layer_sets[i];
+    if (set == PickSet::kNone || set == PickSet::kLevel) continue;
+    render::PointLayer layer = viewport.scene.points[i];
+    layer.opacity = 1.0f;
+    layer.pickable = true;
+    out.scene.points.push_back(std::move(layer));
+    out.sets.push_back(set);
+  }
+  // Level points: the shown level's points only, so a hit's index is a level point index; with a
+  // checkpoint they are the model's once its trace is there.
+  const bool levels_drawn = std::find(viewport.layer_sets.begin(), viewport.layer_sets.end(),
+                                      PickSet::kLevel) != viewport.layer_sets.end() ||
+                            (state.has_rollout() && state.layers().level_points);
+  const bool model_levels = state.checkpoint().empty() || state.shown_trace();
+  if (levels_drawn && model_levels && state.active_data()) {
+    for (render::PointLayer& l : level_pick_scene(state).points) {
+      if (!l.pickable) continue;
+      out.scene.points.push_back(std::move(l));
+      out.sets.push_back(PickSet::kLevel);
+    }
+  }
   return out;
 }
 
@@ -133,7 +185,7 @@ render::RenderScene level_pick_scene(const ViewerState& state) {
   v.layers.prediction = false;
   v.layers.level_points = true;
   v.picked_point = -1;
-  return data->frame(v.frame, v);
+  return data->frame(state.level_frame(), v);
 }
 
 int viewport_at(const std::vector<Viewport>& viewports, int x) {

@@ -13,12 +13,6 @@
 
 namespace dynscope::app::viewer {
 
-/// Which point set a viewport's pickable layer holds.
-enum class PickSet { kNone, kLevel, kPrediction, kTruth, kCompared };
-
-/// "level points", "prediction", "truth", "compared prediction" ("" for none).
-const char* pick_set_name(PickSet set);
-
 /// What one viewport of the 3D view draws: `scene` seen by `camera` in `rect` of the window
 /// (side by side: two viewports share one camera, shifted to each one's centre).
 struct Viewport {
@@ -26,9 +20,21 @@ struct Viewport {
   render::Camera camera;
   render::Rect rect;    ///< Pixels, origin bottom-left (GL convention), full window height.
   std::string caption;  ///< Drawn at the viewport's top ("" for none).
-  PickSet pick_set = PickSet::kNone;  ///< The set a click in this viewport selects from.
-  int pick_layer = -1;                ///< Index into scene.points of that set's layer.
+  /// `[scene.points]` the set each point layer draws (kNone: not selectable, e.g. neighbourhoods).
+  std::vector<PickSet> layer_sets;
 };
+
+/// What a click in one viewport can hit: the viewport's selectable layers, all opaque and pickable
+/// (a translucent ghost is picked where it is drawn in front), its meshes as occluders, and the
+/// set each layer holds.
+struct PickScene {
+  render::RenderScene scene;
+  std::vector<PickSet> sets;  ///< `[scene.points]`.
+};
+
+/// The pick scene of `viewport` of `state` (level points only once the model's trace is shown
+/// when a checkpoint is in use).
+PickScene pick_scene(const ViewerState& state, const Viewport& viewport);
 
 /// The viewports for the current state (none without a document).
 std::vector<Viewport> build_viewports(const ViewerState& state);

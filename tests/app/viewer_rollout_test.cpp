@@ -281,6 +281,159 @@ TEST(ViewerRollout, TwoCheckpointsSideBySide) {
   EXPECT_EQ(ports[1].scene.points[0].series, app.state().rollout().series.prediction);
 }
 
+// The point of `set` drawn nearest the eye in viewport `port` among those projecting into the
+// viewport's free part (not under the panels), with its pixel; -1 when none does.
+int nearest_drawn(const ViewerApp& app, int port, PickSet set, Vec3* pixel) {
+  const Viewport p = app.viewports()[static_cast<size_t>(port)];
+  const RolloutDocument& doc =
+      set == PickSet::kCompared ? *app.state().compared_rollout() : app.state().rollout();
+  const int f = app.state().current_frame();
+  const Points& at = set == PickSet::kTruth ? doc.rollout.truth[static_cast<size_t>(f)]
+                                            : doc.rollout.predicted[static_cast<size_t>(f)];
+  const int lo = std::max(p.rect.x, 400) + 10, hi = p.rect.x + p.rect.width - 10;
+  int best = -1;
+  for (Eigen::Index i = 0; i < at.rows(); ++i) {
+    const Vec3 s = p.camera.project(at.row(i).transpose(), testing::kWidth, testing::kHeight);
+    if (s.x() < lo || s.x() > hi || s.y() < 10 || s.y() > testing::kHeight - 140) continue;
+    if (best < 0 || s.z() < pixel->z()) {
+      best = static_cast<int>(i);
+      *pixel = s;
+    }
+  }
+  return best;
+}
+
+// Ghost mode draws the prediction opaque and the truth translucent: a click selects whichever
+// of the two is drawn in front at the pixel, and says which set and frame it was.
+TEST(ViewerPick, GhostModePicksThePredictionOrTheTruthDrawn) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_rollout_mode(RolloutMode::kGhost);
+  state.set_frame(40);
+  v.app.frame();
+  Vec3 pred_pixel = Vec3::Zero(), truth_pixel = Vec3::Zero();
+  const int pred = nearest_drawn(v.app, 0, PickSet::kPrediction, &pred_pixel);
+  const int truth = nearest_drawn(v.app, 0, PickSet::kTruth, &truth_pixel);
+  ASSERT_GE(pred, 0);
+  ASSERT_GE(truth, 0);
+  // The nearer of the two sets' nearest points is what a click at its centre hits.
+  const bool pred_first = pred_pixel.z() <= truth_pixel.z();
+  const Vec3 pixel = pred_first ? pred_pixel : truth_pixel;
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  Selection sel = state.selection();
+  EXPECT_EQ(sel.set, pred_first ? PickSet::kPrediction : PickSet::kTruth);
+  EXPECT_EQ(sel.point, pred_first ? pred : truth);
+  EXPECT_EQ(sel.frame, 40);
+  EXPECT_EQ(state.selected_point(), -1);  // no level point is selected with it
+  // Prediction-only mode: the prediction's nearest point is picked as the prediction.
+  state.set_rollout_mode(RolloutMode::kPrediction);
+  ASSERT_EQ(nearest_drawn(v.app, 0, PickSet::kPrediction, &pred_pixel), pred);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pred_pixel.x()), static_cast<int>(pred_pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  EXPECT_EQ(state.selection().point, pred);
+  // The selection follows scrubbing (points keep their identity) and remembers its frame.
+  state.set_frame(45);
+  EXPECT_EQ(state.selection().point, pred);
+  EXPECT_EQ(state.selection().frame, 40);
+  state.show_panel(Panel::kInspector);
+  v.app.frame();
+  v.app.frame();
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+  // Empty sky keeps it; clearing drops it.
+  EXPECT_FALSE(v.app.pick(testing::kWidth - 2, 2));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  state.select_point(-1);
+  EXPECT_TRUE(state.selection().empty());
+}
+
+TEST(ViewerPick, SideBySidePicksTheSetOfTheViewportClicked) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_rollout_mode(RolloutMode::kSideBySide);
+  state.set_frame(40);
+  v.app.frame();
+  Vec3 pixel = Vec3::Zero();
+  const int truth = nearest_drawn(v.app, 0, PickSet::kTruth, &pixel);
+  ASSERT_GE(truth, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kTruth);
+  EXPECT_EQ(state.selection().point, truth);
+  const int pred = nearest_drawn(v.app, 1, PickSet::kPrediction, &pixel);
+  ASSERT_GE(pred, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  EXPECT_EQ(state.selection().point, pred);
+  // Sets that are not shown, or points they do not have, are refused.
+  EXPECT_THROW(state.select(PickSet::kCompared, 0), ValueError);
+  EXPECT_THROW(
+      state.select(PickSet::kTruth, static_cast<int>(state.rollout().rollout.num_points())),
+      ValueError);
+  EXPECT_EQ(state.selection().point, pred);
+  // Replacing the rollout drops the selection.
+  state.open_rollout(collide_rollout_file());
+  EXPECT_TRUE(state.selection().empty());
+}
+
+// Frames 0..1 cannot be traced (the state reads p(t-2)): the level browser and inspector use the
+// model's trace of frame 2, the first it can trace, and its points can be picked there.
+TEST(ViewerPick, ObservedFrameUsesTheFirstTraceableFrame) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  state.open_scene(testing::collide_scene());
+  state.set_checkpoint("fake.pt");
+  state.set_frame(0);
+  EXPECT_EQ(state.trace_frame(), 2);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((state.busy() || !state.shown_trace()) && std::chrono::steady_clock::now() < end) {
+    v.app.frame();
+  }
+  ASSERT_NE(state.shown_trace(), nullptr) << v.app.last_error();
+  EXPECT_EQ(state.shown_trace()->frame, 2);
+  EXPECT_EQ(state.current_frame(), 0);
+  EXPECT_EQ(state.level_frame(), 2);
+  const std::vector<Viewport> ports = v.app.viewports();
+  ASSERT_EQ(ports.size(), 1u);
+  EXPECT_NE(ports[0].caption.find("frame 2"), std::string::npos) << ports[0].caption;
+  // Picking reads the trace's level points, drawn at frame 2.
+  const Points p = state.shown_trace()->levels[0].points;
+  int best = -1;
+  Vec3 pixel = Vec3::Zero();
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const Vec3 s = state.camera().project(p.row(i).transpose(), testing::kWidth, testing::kHeight);
+    if (s.x() < 400 || s.x() > testing::kWidth - 10 || s.y() < 10 ||
+        s.y() > testing::kHeight - 80) {
+      continue;
+    }
+    if (best < 0 || s.z() < pixel.z()) {
+      best = static_cast<int>(i);
+      pixel = s;
+    }
+  }
+  ASSERT_GE(best, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kLevel);
+  EXPECT_EQ(state.selection().point, best);
+  EXPECT_EQ(state.selection().frame, 2);
+  state.show_panel(Panel::kInspector);
+  v.app.frame();
+  v.app.frame();
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+  // Frame 1 reads the same trace; frame 5 is traced as itself.
+  state.set_frame(1);
+  EXPECT_NE(state.shown_trace(), nullptr);
+  state.set_frame(5);
+  EXPECT_EQ(state.trace_frame(), 5);
+  EXPECT_EQ(state.shown_trace(), nullptr);
+  // Without a checkpoint every frame is its own.
+  state.set_checkpoint("");
+  state.set_frame(0);
+  EXPECT_EQ(state.trace_frame(), 0);
+  EXPECT_EQ(state.level_frame(), 0);
+}
+
 TEST(InitialStateEdit, StateReadsBackAndHistoryMovesRigidly) {
   const Scene& scene = collide();
   const int t = 2, object = 2;

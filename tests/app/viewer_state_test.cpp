@@ -143,10 +143,13 @@ TEST(ViewerState, TraceOfTheOldSceneIsDropped) {
   model.hold();
   s.update_jobs();
   model.wait_traces_started(1);
-  s.open_scene(other_scene());  // frame 0: no trace is wanted there
+  s.open_scene(other_scene());  // frame 0: the model's first traceable frame (2) is wanted
   model.release();
   settle(s);
-  EXPECT_EQ(s.held_trace(), nullptr);
+  // The old scene's trace was dropped; what is held is the new scene's, captured after the swap.
+  ASSERT_NE(s.held_trace(), nullptr);
+  EXPECT_EQ(s.held_trace()->scene_path, other_scene());
+  EXPECT_EQ(s.held_trace()->frame, 2);
   EXPECT_EQ(s.dropped_results(), 1);
 }
 
