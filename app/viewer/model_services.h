@@ -11,6 +11,7 @@
 
 #include "app/viewer/background_job.h"
 #include "engine/io/trace_file.h"
+#include "engine/rollout/rollout_runner.h"
 #include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
 
@@ -22,7 +23,7 @@ struct RolloutRequest {
   std::string checkpoint;
   Scene scene;
   std::string scene_path;
-  int observed_frames = 3;
+  int observed_frames = RolloutOptions{}.observed_frames;
 };
 
 /// One trace the viewer wants: a forward pass on `scene` at `frame` with the filter weights of

@@ -10,6 +10,8 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/trace_file.h"
 #include "engine/model/model_config.h"
+#include "engine/rollout/rollout_runner.h"
+#include "engine/rollout/state_history.h"
 #include "render/batch_render.h"
 
 namespace dynscope::app::viewer {
@@ -18,9 +20,6 @@ namespace {
 constexpr float kPanelWidth = 370.0f;
 constexpr float kTimelineHeight = 58.0f;
 constexpr float kErrorStripHeight = 64.0f;  // added under the timeline while a rollout is shown
-constexpr int kMaxLevel = 3;                // the U-Net's 4 levels (DESIGN §5)
-constexpr int kFirstTraceFrame = 2;         // the model's state reads p(t-2) (DESIGN §5)
-constexpr int kObservedFrames = 3;
 
 std::string file_name(const std::string& path) {
   const size_t slash = path.find_last_of('/');
@@ -190,7 +189,7 @@ double ViewerState::frame_dt_s() const {
 }
 
 int ViewerState::observed_frames() const {
-  return rollout_ ? rollout_->rollout.observed_frames : kObservedFrames;
+  return rollout_ ? rollout_->rollout.observed_frames : RolloutOptions{}.observed_frames;
 }
 
 void ViewerState::set_frame(int frame) {
@@ -205,7 +204,7 @@ void ViewerState::set_frame(int frame) {
 
 int ViewerState::trace_frame() const {
   if (checkpoint_.empty()) return view_.frame;
-  return std::max(view_.frame, kFirstTraceFrame);
+  return std::max(view_.frame, kFirstTraceableFrame);
 }
 
 int ViewerState::level_frame() const { return shown_trace() ? trace_->frame : view_.frame; }
@@ -257,7 +256,13 @@ Selection ViewerState::selection() const {
   return {};
 }
 
-int ViewerState::num_levels() const { return kMaxLevel + 1; }
+int ViewerState::num_levels() const {
+  // The model's own count: the trace's levels, else those of the config whose hierarchy the level
+  // browser previews for this scene.
+  if (trace_) return static_cast<int>(trace_->levels.size());
+  if (doc_) return ModelConfig::preset(hierarchy_preset(doc_->scene)).levels;
+  return ModelConfig{}.levels;
+}
 
 std::vector<LevelCount> ViewerState::level_counts() const {
   if (const ModelTrace* trace = shown_trace()) return trace_level_counts(*trace);

@@ -9,8 +9,11 @@
 #include <filesystem>
 #include <thread>
 
+#include "engine/core/error.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/model/model_config.h"
+#include "engine/rollout/rollout_runner.h"
 #include "fake_model.h"
 #include "viewer_test_util.h"
 
@@ -204,6 +207,25 @@ TEST(ViewerState, OneLoadedModelPerCheckpointAcrossJobs) {
   settle(s);
   EXPECT_EQ(model.loads(), 3);
   EXPECT_LE(s.model_cache()->size(), 2u);
+}
+
+// Level count and observed frames are the engine's (the model config, the rollout defaults), not
+// the viewer's own numbers.
+TEST(ViewerState, LevelsAndObservedFramesComeFromTheEngine) {
+  ViewerState s;
+  EXPECT_EQ(s.num_levels(), ModelConfig{}.levels);
+  EXPECT_EQ(s.observed_frames(), RolloutOptions{}.observed_frames);
+  s.open_scene(testing::collide_scene());
+  const int levels = ModelConfig::preset(hierarchy_preset(s.document().scene)).levels;
+  EXPECT_EQ(s.num_levels(), levels);
+  s.set_level(levels - 1);
+  EXPECT_THROW(s.set_level(levels), ValueError);
+  EXPECT_EQ(s.level_counts().size(), static_cast<size_t>(levels));
+  // The rollout's own count wins once one is shown.
+  Rollout r = cv_rollout(s.document().scene, testing::collide_scene());
+  r.observed_frames = 5;
+  s.set_rollout(r, "r", &s.document().scene);
+  EXPECT_EQ(s.observed_frames(), 5);
 }
 
 }  // namespace
