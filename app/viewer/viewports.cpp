@@ -150,6 +150,11 @@ PickScene pick_scene(const ViewerState& state, const Viewport& viewport) {
   out.scene.points.clear();
   out.scene.lines.clear();
   out.scene.boxes.clear();
+  // A translucent mesh shows the points behind it, so only opaque ones hide points from a click.
+  out.scene.meshes.erase(
+      std::remove_if(out.scene.meshes.begin(), out.scene.meshes.end(),
+                     [](const render::MeshInstance& m) { return m.opacity < 1.0f; }),
+      out.scene.meshes.end());
   for (size_t i = 0; i < viewport.scene.points.size(); ++i) {
     const PickSet set = viewport.layer_sets[i];
     if (set == PickSet::kNone || set == PickSet::kLevel) continue;
