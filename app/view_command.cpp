@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -15,6 +16,9 @@
 #include "app/viewer/platform.h"
 #include "app/viewer/viewer_app.h"
 #include "engine/core/error.h"
+#include "engine/rollout/model_points.h"
+#include "engine/rollout/model_predictor.h"
+#include "engine/train/train_options.h"
 #include "render/batch_render.h"
 #include "render/context_factory.h"
 #include "render/glfw_context.h"
@@ -33,34 +37,64 @@ struct ViewOptions {
   int warmup_frames = 3;
 };
 
-// The viewer's model: checkpoints through the engine's LibTorch code (loaded per call, so the
-// background thread owns what it loads).
+// The viewer's model: a checkpoint loaded once (the viewer's ModelCache keeps one per checkpoint)
+// and run through the engine's LibTorch code, one call at a time per model.
+class EngineCheckpoint : public viewer::LoadedCheckpoint {
+ public:
+  explicit EngineCheckpoint(const std::string& path)
+      : path(path), model(load_model(path)), sampling(checkpoint_sampling(path, model.config)) {}
+  std::string path;
+  LoadedModel model;
+  SamplingOptions sampling;
+  std::mutex mutex;
+};
+
 class EngineModelServices : public viewer::ModelServices {
  public:
-  Rollout rollout(const viewer::RolloutRequest& request, Progress* progress) override {
+  std::shared_ptr<viewer::LoadedCheckpoint> load(const std::string& checkpoint) override {
+    require_readable_file(checkpoint);
+    return std::make_shared<EngineCheckpoint>(checkpoint);
+  }
+  Rollout rollout(viewer::LoadedCheckpoint& loaded, const viewer::RolloutRequest& request,
+                  viewer::JobControl& control) override {
+    auto& c = static_cast<EngineCheckpoint&>(loaded);
+    std::lock_guard<std::mutex> lock(c.mutex);
     RolloutOptions options;
     options.observed_frames = request.observed_frames;
-    return rollout_checkpoint(request.checkpoint, request.scene, request.scene_path, options, 0.0,
-                              progress);
+    const ModelPoints points = build_model_points(request.scene, c.sampling);
+    // Cancellation is polled before every model step.
+    const StepPredictor predict = [&c, &control](const PointState& state) {
+      control.check();
+      return c.model.predict(state);
+    };
+    Rollout r = run_rollout(request.scene, points, predict, options, control.progress());
+    r.scene_path = request.scene_path;
+    r.checkpoint_path = c.path;
+    r.model_config = c.model.config_json;
+    return r;
   }
-  ModelTrace trace(const std::string& checkpoint, const Scene& scene, const std::string& scene_path,
-                   int frame, int level, int picked) override {
-    return capture_checkpoint_trace(checkpoint, scene, scene_path, frame, level, picked);
+  ModelTrace trace(viewer::LoadedCheckpoint& loaded, const viewer::TraceRequest& request,
+                   viewer::JobControl& control) override {
+    auto& c = static_cast<EngineCheckpoint&>(loaded);
+    std::lock_guard<std::mutex> lock(c.mutex);
+    control.check();
+    return capture_checkpoint_trace(c.path, *request.scene, request.scene_path, request.frame,
+                                    request.level, request.picked);
   }
 };
 
 void load_inputs(viewer::ViewerApp& app, const ViewOptions& o) {
-  if (!o.scene_path.empty()) app.open_file(o.scene_path);
-  if (!o.trace_path.empty()) app.open_trace(o.trace_path);
+  if (!o.scene_path.empty()) app.state().open_file(o.scene_path);
+  if (!o.trace_path.empty()) app.state().open_trace(o.trace_path);
   if (!o.checkpoint.empty()) {
     require_readable_file(o.checkpoint);
-    app.set_checkpoint(o.checkpoint);
+    app.state().set_checkpoint(o.checkpoint);
   }
   if (!o.compare.empty()) {
     require_readable_file(o.compare);
-    app.start_rollouts(o.compare);
+    app.state().start_rollouts(o.compare);
   }
-  if (!o.view_path.empty()) app.open_view(o.view_path);
+  if (!o.view_path.empty()) app.state().open_view(o.view_path);
 }
 
 void run_headless(const ViewOptions& o, int width, int height) {
@@ -72,9 +106,9 @@ void run_headless(const ViewOptions& o, int width, int height) {
   load_inputs(app, o);
   // ImGui lays windows out over the first frames (auto-sized tables, popups); draw a few, and
   // wait for rollouts and traces so the picture shows their results.
-  for (int i = 0; i < o.warmup_frames || app.busy(); ++i) {
+  for (int i = 0; i < o.warmup_frames || app.state().busy(); ++i) {
     app.frame();
-    if (app.busy()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (app.state().busy()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   app.request_screenshot(o.screenshot);
   app.frame();

@@ -69,6 +69,7 @@ class GlContext;
   X(READPIXELS, ReadPixels)                                         \
   X(RENDERBUFFERSTORAGE, RenderbufferStorage)                       \
   X(RENDERBUFFERSTORAGEMULTISAMPLE, RenderbufferStorageMultisample) \
+  X(SCISSOR, Scissor)                                               \
   X(SHADERSOURCE, ShaderSource)                                     \
   X(TEXIMAGE2D, TexImage2D)                                         \
   X(TEXPARAMETERI, TexParameteri)                                   \

@@ -53,11 +53,23 @@ PointSetBuffer::~PointSetBuffer() {
 }
 
 void PointSetBuffer::draw(int frame) const {
+  if (!bind(frame)) return;
+  gl_.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, num_points_);
+  gl_.BindVertexArray(0);
+}
+
+void PointSetBuffer::draw_sprites(int frame) const {
+  if (!bind(frame)) return;
+  gl_.DrawArraysInstanced(GL_POINTS, 0, 1, num_points_);
+  gl_.BindVertexArray(0);
+}
+
+bool PointSetBuffer::bind(int frame) const {
   if (frame < 0 || frame >= num_frames_) {
     throw ValueError(
         "frame", std::to_string(frame) + " is outside [0, " + std::to_string(num_frames_) + ")");
   }
-  if (num_points_ == 0) return;
+  if (num_points_ == 0) return false;
   gl_.BindVertexArray(vao_);
   const size_t first = static_cast<size_t>(frame) * num_points_;
   gl_.BindBuffer(GL_ARRAY_BUFFER, positions_);
@@ -75,8 +87,7 @@ void PointSetBuffer::draw(int frame) const {
   } else {
     gl_.VertexAttrib1f(2, 0.0f);
   }
-  gl_.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, num_points_);
-  gl_.BindVertexArray(0);
+  return true;
 }
 
 }  // namespace dynscope::render

@@ -30,8 +30,14 @@ class PointSetBuffer {
   /// Draws frame `frame` as instanced 4-vertex strips (points.vert: location 0 centre, 1 colour,
   /// 2 scalar) with the currently bound program; throws ValueError if the frame is out of range.
   void draw(int frame) const;
+  /// Draws frame `frame` as one point sprite per point (discs.vert, same attributes); throws
+  /// ValueError if the frame is out of range.
+  void draw_sprites(int frame) const;
 
  private:
+  /// Binds frame `frame`'s attribute offsets; false when there is nothing to draw.
+  bool bind(int frame) const;
+
   const GlFunctions& gl_;
   int num_frames_ = 0;
   int num_points_ = 0;

@@ -8,6 +8,13 @@
 namespace dynscope::render {
 
 void PointSeries::validate(const std::string& what) const {
+  validate_sizes(what);
+  for (float v : positions) {
+    if (!std::isfinite(v)) throw ValueError(what, "positions contain a non-finite value");
+  }
+}
+
+void PointSeries::validate_sizes(const std::string& what) const {
   if (num_frames < 0 || num_points < 0) throw ValueError(what, "negative size");
   const size_t tn = static_cast<size_t>(num_frames) * num_points;
   if (positions.size() != tn * 3) {
@@ -21,9 +28,6 @@ void PointSeries::validate(const std::string& what) const {
   if (!colors.empty() && colors.size() != static_cast<size_t>(num_points) * 3) {
     throw ValueError(what, "colors has " + std::to_string(colors.size()) +
                                " values, expected N*3 = " + std::to_string(num_points * 3));
-  }
-  for (float v : positions) {
-    if (!std::isfinite(v)) throw ValueError(what, "positions contain a non-finite value");
   }
 }
 
@@ -87,6 +91,36 @@ void LineSet::add(const Vec3& a, const Vec3& b, const Color& c) {
   }
 }
 
+const char* point_style_name(PointStyle style) {
+  switch (style) {
+    case PointStyle::kSpheres:
+      return "spheres";
+    case PointStyle::kDiscs:
+      return "discs";
+    case PointStyle::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+PointStyle parse_point_style(const std::string& name) {
+  for (PointStyle s : {PointStyle::kAuto, PointStyle::kSpheres, PointStyle::kDiscs}) {
+    if (name == point_style_name(s)) return s;
+  }
+  throw ValueError("point_style", "'" + name + "' is not one of auto, spheres, discs");
+}
+
+int64_t RenderScene::point_count() const {
+  int64_t n = 0;
+  for (const PointLayer& layer : points) n += layer.series ? layer.series->num_points : 0;
+  return n;
+}
+
+PointStyle RenderScene::resolved_point_style() const {
+  if (point_style != PointStyle::kAuto) return point_style;
+  return point_count() > kDiscPointThreshold ? PointStyle::kDiscs : PointStyle::kSpheres;
+}
+
 Aabb RenderScene::bounds() const {
   Aabb box;
   for (const MeshInstance& m : meshes) {
@@ -119,7 +153,8 @@ void RenderScene::validate() const {
     const PointLayer& layer = points[i];
     const std::string what = "point layer '" + layer.name + "'";
     if (!layer.series) throw ValueError(what, "has no point series");
-    layer.series->validate(what);
+    // Values are checked once per series when it is uploaded; per frame only the sizes.
+    layer.series->validate_sizes(what);
     if (layer.frame < 0 || layer.frame >= layer.series->num_frames) {
       throw ValueError(what, "frame " + std::to_string(layer.frame) + " is outside [0, " +
                                  std::to_string(layer.series->num_frames) + ")");

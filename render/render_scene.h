@@ -23,8 +23,10 @@ struct PointSeries {
   std::vector<float> colors;  ///< `[N,3]` per-point RGB in [0,1] (same for every frame), or empty.
 
   /// Throws ValueError(`what`) if array sizes disagree with num_frames/num_points or values are
-  /// not finite.
+  /// not finite (O(T·N): done once, when the renderer uploads the series).
   void validate(const std::string& what) const;
+  /// The size checks of validate only (O(1)): what every drawn frame checks.
+  void validate_sizes(const std::string& what) const;
   /// Positions of point `i` at `frame` (no bounds check beyond assert-free Eigen copy).
   Vec3 position(int frame, int i) const;
   /// Bounding box of frame `frame` (empty for no points).
@@ -41,6 +43,22 @@ enum class PointColoring {
   kPerPoint,  ///< PointSeries::colors.
   kScalar,    ///< PointSeries::scalars of the drawn frame through PointLayer::colormap.
 };
+
+/// How points are drawn: ray-cast sphere impostors (lit, exact depth, 4 vertices per point) or
+/// flat screen-aligned discs (one point sprite each, flat depth), for large clouds.
+enum class PointStyle {
+  kAuto,     ///< Discs when the scene draws more than kDiscPointThreshold points, else spheres.
+  kSpheres,  ///< Sphere impostors.
+  kDiscs,    ///< Flat round sprites.
+};
+
+/// Points drawn per frame above which kAuto switches to discs.
+constexpr int kDiscPointThreshold = 50000;
+
+/// "auto", "spheres" or "discs".
+const char* point_style_name(PointStyle style);
+/// Parses point_style_name's names; throws ValueError("point_style") otherwise.
+PointStyle parse_point_style(const std::string& name);
 
 /// One set of sphere impostors: a frame of a point series with a style.
 struct PointLayer {
@@ -119,10 +137,17 @@ struct RenderScene {
   std::vector<LineSet> lines;
   std::vector<WireBox> boxes;
   float box_line_width = 1.0f;
+  PointStyle point_style = PointStyle::kAuto;
+
+  /// Points drawn in this image (over all point layers).
+  int64_t point_count() const;
+  /// point_style with kAuto resolved by point_count().
+  PointStyle resolved_point_style() const;
 
   /// World bounding box of everything drawn except the grid (for camera fitting).
   Aabb bounds() const;
   /// Throws ValueError naming the first inconsistent element (frame out of range, sizes, names).
+  /// Costs O(layers + mesh faces), not O(points): point values are checked at upload.
   void validate() const;
 };
 

@@ -158,26 +158,61 @@ void Renderer::ensure_target(Target& t, int width, int height, int samples) {
   }
 }
 
+int find_rect(int x, int y, const std::vector<Rect>& rects) {
+  for (size_t i = 0; i < rects.size(); ++i) {
+    if (rects[i].contains(x, y)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 void Renderer::render(const RenderScene& scene, const Camera& camera) {
+  render(scene, camera, Rect{0, 0, context_.width(), context_.height()});
+}
+
+void Renderer::render(const RenderScene& scene, const Camera& camera, const Rect& viewport) {
   scene.validate();
   camera.validate();
-  evict_expired();
   const int w = context_.width(), h = context_.height();
+  const Rect& r = viewport;
+  if (r.width <= 0 || r.height <= 0 || r.x < 0 || r.y < 0 || r.x + r.width > w ||
+      r.y + r.height > h) {
+    throw ValueError("viewport", std::to_string(r.width) + "x" + std::to_string(r.height) + "+" +
+                                     std::to_string(r.x) + "+" + std::to_string(r.y) +
+                                     " is outside the " + std::to_string(w) + "x" +
+                                     std::to_string(h) + " window");
+  }
+  evict_expired();
+  const bool partial = !(r == Rect{0, 0, w, h});
   if (samples_ > 1) {
     ensure_target(*msaa_, w, h, samples_);
     gl_.BindFramebuffer(GL_FRAMEBUFFER, msaa_->fbo);
   } else {
     gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
   }
+  // The scissor limits the clear, the drawing and the multisample resolve to the viewport.
+  if (partial) {
+    gl_.Enable(GL_SCISSOR_TEST);
+    gl_.Scissor(r.x, r.y, r.width, r.height);
+  }
   draw_scene(scene, camera, w, h);
   if (samples_ > 1) {
     // Resolve the multisampled image into the context's own framebuffer.
     gl_.BindFramebuffer(GL_READ_FRAMEBUFFER, msaa_->fbo);
     gl_.BindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-    gl_.BlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    gl_.BlitFramebuffer(r.x, r.y, r.x + r.width, r.y + r.height, r.x, r.y, r.x + r.width,
+                        r.y + r.height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
+  if (partial) gl_.Disable(GL_SCISSOR_TEST);
   gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl_.check("render");
+}
+
+void Renderer::clear(const Color& color) {
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl_.Viewport(0, 0, context_.width(), context_.height());
+  gl_.ClearColor(color.x(), color.y(), color.z(), 1.0f);
+  gl_.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gl_.check("clear");
 }
 
 Image Renderer::render_image(const RenderScene& scene, const Camera& camera) {
@@ -221,16 +256,19 @@ void Renderer::draw_scene(const RenderScene& scene, const Camera& camera, int w,
     gl_.DepthMask(GL_TRUE);
   }
   draw_meshes(scene, false, view, proj, light);
+  const bool discs = scene.resolved_point_style() == PointStyle::kDiscs;
+  if (discs) gl_.Enable(GL_PROGRAM_POINT_SIZE);
   for (const PointLayer& layer : scene.points) {
-    if (layer.opacity >= 1.0f) draw_points(layer, view, proj, light);
+    if (layer.opacity >= 1.0f) draw_points(layer, discs, view, proj, light, h);
   }
   draw_lines_and_boxes(scene, view, proj);
   // Translucent layers last, without depth writes, so they never hide what is behind them.
   gl_.DepthMask(GL_FALSE);
   draw_meshes(scene, true, view, proj, light);
   for (const PointLayer& layer : scene.points) {
-    if (layer.opacity < 1.0f) draw_points(layer, view, proj, light);
+    if (layer.opacity < 1.0f) draw_points(layer, discs, view, proj, light, h);
   }
+  if (discs) gl_.Disable(GL_PROGRAM_POINT_SIZE);
   gl_.DepthMask(GL_TRUE);
   gl_.BindVertexArray(0);
 }
@@ -256,11 +294,12 @@ void Renderer::draw_meshes(const RenderScene& scene, bool translucent, const Eig
   }
 }
 
-void Renderer::draw_points(const PointLayer& layer, const Eigen::Matrix4f& view,
-                           const Eigen::Matrix4f& proj, const Eigen::Vector3f& light) {
+void Renderer::draw_points(const PointLayer& layer, bool discs, const Eigen::Matrix4f& view,
+                           const Eigen::Matrix4f& proj, const Eigen::Vector3f& light, int height) {
   const PointSetBuffer& buffer = point_buffer(layer.series);
-  const ShaderProgram& p = programs_.at("points");
+  const ShaderProgram& p = programs_.at(discs ? "discs" : "points");
   p.use();
+  if (discs) p.set("u_viewport_height", static_cast<float>(height));
   p.set_matrix("u_view", view.data());
   p.set_matrix("u_proj", proj.data());
   p.set("u_light_view", light.x(), light.y(), light.z());
@@ -277,7 +316,11 @@ void Renderer::draw_points(const PointLayer& layer, const Eigen::Matrix4f& view,
     p.set("u_range", layer.range_min, layer.range_max);
   }
   p.set("u_color_mode", mode);
-  buffer.draw(layer.frame);
+  if (discs) {
+    buffer.draw_sprites(layer.frame);
+  } else {
+    buffer.draw(layer.frame);
+  }
 }
 
 void Renderer::draw_lines_and_boxes(const RenderScene& scene, const Eigen::Matrix4f& view,
@@ -353,7 +396,10 @@ PickResult Renderer::pick(const RenderScene& scene, const Camera& camera, int x,
   gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
   draw_meshes(scene, false, view, proj, light);
   gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  const ShaderProgram& p = programs_.at("pick");
+  // Picking sees what is drawn: discs where the image shows discs.
+  const bool discs = scene.resolved_point_style() == PointStyle::kDiscs;
+  const ShaderProgram& p = programs_.at(discs ? "pick_discs" : "pick");
+  if (discs) gl_.Enable(GL_PROGRAM_POINT_SIZE);
   for (size_t i = 0; i < scene.points.size(); ++i) {
     const PointLayer& layer = scene.points[i];
     if (!layer.pickable || layer.opacity < 1.0f) continue;
@@ -364,8 +410,14 @@ PickResult Renderer::pick(const RenderScene& scene, const Camera& camera, int x,
     p.set("u_radius", layer.radius);
     p.set("u_color_mode", 0);
     p.set("u_layer", static_cast<int>(i));
-    buffer.draw(layer.frame);
+    if (discs) {
+      p.set("u_viewport_height", static_cast<float>(h));
+      buffer.draw_sprites(layer.frame);
+    } else {
+      buffer.draw(layer.frame);
+    }
   }
+  if (discs) gl_.Disable(GL_PROGRAM_POINT_SIZE);
   uint8_t pixel[4] = {0, 0, 0, 0};
   gl_.PixelStorei(GL_PACK_ALIGNMENT, 1);
   gl_.BindFramebuffer(GL_READ_FRAMEBUFFER, pick_->fbo);

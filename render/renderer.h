@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 #include "render/camera.h"
 #include "render/gl_context.h"
@@ -18,6 +19,22 @@ namespace dynscope::render {
 
 class MeshBuffer;
 class PointSetBuffer;
+
+/// A rectangle of the framebuffer in pixels, origin bottom-left (GL's convention, MuJoCo mjrRect).
+struct Rect {
+  int x = 0, y = 0;
+  int width = 0, height = 0;
+  /// True if pixel (px, py) (same origin) lies inside.
+  bool contains(int px, int py) const {
+    return px >= x && px < x + width && py >= y && py < y + height;
+  }
+  bool operator==(const Rect& o) const {
+    return x == o.x && y == o.y && width == o.width && height == o.height;
+  }
+};
+
+/// Index of the first of `rects` containing pixel (x, y) (origin bottom-left), or -1.
+int find_rect(int x, int y, const std::vector<Rect>& rects);
 
 /// What a pixel shows in the picking pass.
 struct PickResult {
@@ -42,6 +59,12 @@ class Renderer {
   /// Draws `scene` seen by `camera` into the context's default framebuffer (its full size).
   /// Throws ValueError if the scene is inconsistent.
   void render(const RenderScene& scene, const Camera& camera);
+  /// Draws `scene` with the whole window's projection but clears and writes only `viewport`
+  /// (scissored, multisample resolve included), so side-by-side views share one camera frame.
+  /// Throws ValueError if the scene is inconsistent or the rectangle lies outside the window.
+  void render(const RenderScene& scene, const Camera& camera, const Rect& viewport);
+  /// Clears the whole default framebuffer to `color` (nothing to draw).
+  void clear(const Color& color);
   /// render() followed by the context's read_pixels().
   Image render_image(const RenderScene& scene, const Camera& camera);
   /// Which pickable, opaque point is visible at pixel (x, y) (origin top-left) when `scene` is
@@ -69,8 +92,8 @@ class Renderer {
   GLuint colormap_texture(const std::string& name);
   void ensure_target(Target& target, int width, int height, int samples);
   void draw_scene(const RenderScene& scene, const Camera& camera, int width, int height);
-  void draw_points(const PointLayer& layer, const Eigen::Matrix4f& view,
-                   const Eigen::Matrix4f& proj, const Eigen::Vector3f& light);
+  void draw_points(const PointLayer& layer, bool discs, const Eigen::Matrix4f& view,
+                   const Eigen::Matrix4f& proj, const Eigen::Vector3f& light, int height);
   void draw_meshes(const RenderScene& scene, bool translucent, const Eigen::Matrix4f& view,
                    const Eigen::Matrix4f& proj, const Eigen::Vector3f& light);
   void draw_lines_and_boxes(const RenderScene& scene, const Eigen::Matrix4f& view,

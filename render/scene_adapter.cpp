@@ -226,6 +226,7 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
   const ViewLayers& l = view.layers;
   RenderScene out;
   out.background = view.background;
+  out.point_style = parse_point_style(view.point_style);
   out.grid = grid_for_bounds(scene_.bounds());
   out.grid.visible = l.grid;
   const bool any_points = (l.ground_truth || l.level_points || l.interaction_points ||
@@ -665,6 +666,7 @@ RenderScene rollout_frame(const RolloutRenderData& data, int frame, const ViewSp
   }
   RenderScene out;
   out.background = view.background;
+  out.point_style = parse_point_style(view.point_style);
   out.grid = data.grid;
   out.grid.visible = view.layers.grid;
   if (view.layers.meshes && data.scene) {

@@ -60,6 +60,7 @@ const std::vector<ProgramSources>& renderer_programs() {
       {"points", "points.vert", "points.frag"}, {"pick", "points.vert", "pick.frag"},
       {"mesh", "mesh.vert", "mesh.frag"},       {"lines", "lines.vert", "lines.frag"},
       {"boxes", "box.vert", "lines.frag"},      {"grid", "grid.vert", "grid.frag"},
+      {"discs", "discs.vert", "discs.frag"},    {"pick_discs", "discs.vert", "pick_discs.frag"},
   };
   return kPrograms;
 }

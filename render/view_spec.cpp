@@ -9,6 +9,7 @@
 #include "engine/core/error.h"
 #include "engine/core/log.h"
 #include "engine/io/temp_file.h"
+#include "render/render_scene.h"
 
 namespace dynscope::render {
 namespace {
@@ -120,6 +121,7 @@ void ViewSpec::validate() const {
   if (level < 0) throw ValueError("level", std::to_string(level) + " < 0");
   if (picked_point < -1) throw ValueError("picked_point", std::to_string(picked_point) + " < -1");
   if (point_radius < 0) throw ValueError("points.radius", "must be >= 0");
+  parse_point_style(point_style);
   if (voxel < 0) throw ValueError("points.voxel", "must be >= 0");
   if (neighbors < 1) throw ValueError("points.neighbors", "must be >= 1");
   if (relation_radius < 0) throw ValueError("points.relation_radius", "must be >= 0");
@@ -160,6 +162,7 @@ json view_spec_to_json(const ViewSpec& v) {
   j["level"] = v.level;
   j["labels"] = v.labels;
   j["points"] = {{"radius", v.point_radius},
+                 {"style", v.point_style},
                  {"voxel", v.voxel},
                  {"neighbors", v.neighbors},
                  {"relation_radius", v.relation_radius}};
@@ -239,6 +242,7 @@ ViewSpec view_spec_from_json(const json& j, const std::string& source) {
   if (const json* points = top.find("points")) {
     ObjectReader r = top.child("points", *points);
     r.read("radius", v.point_radius);
+    r.read("style", v.point_style);
     r.read("voxel", v.voxel);
     r.read("neighbors", v.neighbors);
     r.read("relation_radius", v.relation_radius);

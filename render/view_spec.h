@@ -47,6 +47,8 @@ struct ViewSpec {
   int level = 0;                 ///< U-Net level for level points, voxels and neighbourhoods.
   bool labels = true;            ///< Frame number and layer names drawn on images.
   float point_radius = 0.0f;     ///< Sphere radius; 0 picks one from the voxel size.
+  /// Point drawing: "auto" (flat discs above kDiscPointThreshold points), "spheres" or "discs".
+  std::string point_style = "auto";
   double voxel = 0.0;            ///< Level-0 grid voxel; 0 picks the paper's default per scale.
   int neighbors = 16;            ///< K of the object kNN.
   double relation_radius = 0.0;  ///< Relational radius at level 0; 0 means 2 x voxel.

@@ -1,11 +1,17 @@
-// ModelServices: what the viewer asks of a trained model (rollouts, traces) behind a torch-free
-// interface; `dynscope view` implements it with the engine's LibTorch code, tests with fakes.
+// ModelServices: what the viewer asks of a trained model (load, rollouts, traces) behind a
+// torch-free interface; `dynscope view` implements it with the engine's LibTorch code, tests with
+// fakes. ModelCache keeps one loaded model per checkpoint for every job that runs it.
 #pragma once
 
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
 #include <string>
 
-#include "engine/core/progress.h"
+#include "app/viewer/background_job.h"
 #include "engine/io/trace_file.h"
+#include "engine/rollout/rollout_runner.h"
 #include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
 
@@ -17,22 +23,63 @@ struct RolloutRequest {
   std::string checkpoint;
   Scene scene;
   std::string scene_path;
-  int observed_frames = 3;
+  int observed_frames = RolloutOptions{}.observed_frames;
 };
 
-/// The model behind the viewer. Calls may come from a background thread (one at a time per
-/// object); implementations must not touch the viewer or GL.
+/// One trace the viewer wants: a forward pass on `scene` at `frame` with the filter weights of
+/// level `level`'s point `picked` (-1: none).
+struct TraceRequest {
+  std::string checkpoint;
+  std::shared_ptr<const Scene> scene;
+  std::string scene_path;
+  int frame = -1, level = -1, picked = -1;
+};
+
+/// A checkpoint loaded once (weights, config) by ModelServices::load; what it holds is the
+/// implementation's. Jobs share it; implementations serialise calls on one model if needed.
+class LoadedCheckpoint {
+ public:
+  virtual ~LoadedCheckpoint() = default;
+};
+
+/// The model behind the viewer. Calls come from background threads; implementations must not
+/// touch the viewer or GL, and should poll `control` (JobControl::check) between steps.
 class ModelServices {
  public:
   virtual ~ModelServices() = default;
-  /// Rolls `request.checkpoint` out on `request.scene`, advancing `progress` (may be null) once
-  /// per predicted frame; scene_path and checkpoint_path of the result are filled. Throws Error
-  /// (IoError naming the checkpoint, ValueError for a bad request) on failure.
-  virtual Rollout rollout(const RolloutRequest& request, Progress* progress) = 0;
-  /// One forward pass of `checkpoint` on `scene` at `frame` with the filter weights of level
-  /// `level`'s point `picked` (-1: none), as capture_checkpoint_trace. Throws Error on failure.
-  virtual ModelTrace trace(const std::string& checkpoint, const Scene& scene,
-                           const std::string& scene_path, int frame, int level, int picked) = 0;
+  /// Loads `checkpoint`. Throws Error (IoError naming the file) on failure.
+  virtual std::shared_ptr<LoadedCheckpoint> load(const std::string& checkpoint) = 0;
+  /// Rolls `model` (loaded from request.checkpoint) out on `request.scene`, advancing
+  /// control.progress() once per predicted frame; scene_path and checkpoint_path of the result are
+  /// filled. Throws JobCancelled when cancelled, Error (ValueError for a bad request) on failure.
+  virtual Rollout rollout(LoadedCheckpoint& model, const RolloutRequest& request,
+                          JobControl& control) = 0;
+  /// One forward pass of `model` as capture_checkpoint_trace. Throws JobCancelled or Error.
+  virtual ModelTrace trace(LoadedCheckpoint& model, const TraceRequest& request,
+                           JobControl& control) = 0;
+};
+
+/// One loaded model per checkpoint, shared by every job that runs it (thread-safe). A model is
+/// loaded on first use, from the job's thread, and kept until forget_except drops it.
+class ModelCache {
+ public:
+  /// `services` must outlive the cache.
+  explicit ModelCache(ModelServices& services) : services_(services) {}
+  /// The loaded model of `checkpoint` (loading it on first use); throws what load throws.
+  std::shared_ptr<LoadedCheckpoint> get(const std::string& checkpoint);
+  /// Drops every model but those of `keep` (running jobs keep theirs alive).
+  void forget_except(const std::set<std::string>& keep);
+  /// ModelServices::load calls so far.
+  int loads() const;
+  /// Checkpoints held now.
+  size_t size() const;
+
+ private:
+  ModelServices& services_;
+  mutable std::mutex mutex_;
+  std::mutex load_mutex_;  ///< One load at a time, so two jobs never load the same file twice.
+  std::map<std::string, std::shared_ptr<LoadedCheckpoint>> models_;
+  int loads_ = 0;
 };
 
 }  // namespace dynscope::app::viewer

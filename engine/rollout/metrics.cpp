@@ -38,11 +38,15 @@ Points select_rows(const Points& points, const std::vector<int32_t>& ids, int32_
   return out;
 }
 
-bool contact_predicted(const std::vector<double>& distances, double threshold) {
-  for (double d : distances) {
-    if (d < threshold) return true;
+int first_contact_frame(const std::vector<double>& distances, double threshold) {
+  for (size_t f = 0; f < distances.size(); ++f) {
+    if (distances[f] < threshold) return static_cast<int>(f);
   }
-  return false;
+  return -1;
+}
+
+bool contact_predicted(const std::vector<double>& distances, double threshold) {
+  return first_contact_frame(distances, threshold) >= 0;
 }
 
 }  // namespace dynscope

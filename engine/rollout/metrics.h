@@ -24,7 +24,11 @@ double min_distance(const Points& a, const Points& b);
 /// Rows of `points` whose id equals `id`.
 Points select_rows(const Points& points, const std::vector<int32_t>& ids, int32_t id);
 
-/// True if any of the per-frame distances is below `threshold` (strictly).
+/// First frame whose distance is below `threshold` (strictly), or -1: the one contact rule of
+/// rollouts, evaluation and the viewer.
+int first_contact_frame(const std::vector<double>& distances, double threshold);
+
+/// True if any of the per-frame distances is below `threshold` (first_contact_frame >= 0).
 bool contact_predicted(const std::vector<double>& distances, double threshold);
 
 }  // namespace dynscope

@@ -35,10 +35,10 @@ fs::path temp_dir(const std::string& name) {
 // The level point nearest the eye among those projecting into the free part of the window (not
 // under the panels), with its pixel: nothing can hide it.
 int visible_point(const ViewerApp& app, Vec3* pixel) {
-  const Points p = level_positions(*app.document().data, app.current_frame());
+  const Points p = level_positions(*app.state().document().data, app.state().current_frame());
   int best = -1;
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
-    const Vec3 s = app.camera().project(p.row(i).transpose(), kWidth, kHeight);
+    const Vec3 s = app.state().camera().project(p.row(i).transpose(), kWidth, kHeight);
     if (s.x() < 400 || s.x() > kWidth - 10 || s.y() < 10 || s.y() > kHeight - 80) continue;
     if (best < 0 || s.z() < pixel->z()) {
       best = static_cast<int>(i);
@@ -50,76 +50,76 @@ int visible_point(const ViewerApp& app, Vec3* pixel) {
 
 TEST(ViewerApp, ScrubbingShowsTheFramesDataWithoutUploads) {
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.frame();
   const int64_t uploads = v.app.upload_count();
-  const SceneDocument& doc = v.app.document();
+  const SceneDocument& doc = v.app.state().document();
   for (int k : {10, 25, 59}) {
-    v.app.set_frame(k);
+    v.app.state().set_frame(k);
     v.app.frame();
-    EXPECT_EQ(v.app.current_frame(), k);
-    const PointInfo info = inspect_point(*doc.data, 3, v.app.current_frame());
+    EXPECT_EQ(v.app.state().current_frame(), k);
+    const PointInfo info = inspect_point(*doc.data, 3, v.app.state().current_frame());
     const Vec3 expected = doc.data->cloud().positions(doc.scene, k).row(info.cloud_point);
     EXPECT_NEAR((info.position - expected).norm(), 0.0, 1e-12) << "frame " << k;
   }
   // Point series and meshes are uploaded once; scrubbing changes only the frame drawn. (A picked
   // point's neighbourhood adds a few one-frame series per frame; none is shown here.)
   EXPECT_EQ(v.app.upload_count(), uploads);
-  v.app.set_frame(1000);
-  EXPECT_EQ(v.app.current_frame(), 59);
-  v.app.set_frame(-4);
-  EXPECT_EQ(v.app.current_frame(), 0);
+  v.app.state().set_frame(1000);
+  EXPECT_EQ(v.app.state().current_frame(), 59);
+  v.app.state().set_frame(-4);
+  EXPECT_EQ(v.app.state().current_frame(), 0);
 }
 
 TEST(ViewerApp, ScrubbedFrameIsWhatIsDrawn) {
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.set_ui_visible(false);
-  v.app.set_frame(0);
+  v.app.state().set_frame(0);
   v.app.frame();
   const render::Image first = v.app.read_pixels();
-  v.app.set_frame(40);
+  v.app.state().set_frame(40);
   v.app.frame();
   const render::Image later = v.app.read_pixels();
   // The probe has moved: the images differ; going back reproduces frame 0 exactly.
   EXPECT_LT(render::compare_images(later, first, 8).fraction_within, 0.999);
-  v.app.set_frame(0);
+  v.app.state().set_frame(0);
   v.app.frame();
   EXPECT_EQ(render::compare_images(v.app.read_pixels(), first, 0).max_difference, 0);
 }
 
 TEST(ViewerApp, KeyboardStepsAndPlays) {
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.frame();
   v.platform.press_key(ImGuiKey_RightArrow);
   v.app.frame();
   v.app.frame();  // the key is released again: one step only
-  EXPECT_EQ(v.app.current_frame(), 1);
+  EXPECT_EQ(v.app.state().current_frame(), 1);
   v.platform.press_key(ImGuiKey_End);
   v.app.frame();
-  EXPECT_EQ(v.app.current_frame(), 59);
+  EXPECT_EQ(v.app.state().current_frame(), 59);
   v.platform.press_key(ImGuiKey_LeftArrow);
   v.app.frame();
-  EXPECT_EQ(v.app.current_frame(), 58);
+  EXPECT_EQ(v.app.state().current_frame(), 58);
   v.platform.press_key(ImGuiKey_Home);
   v.app.frame();
-  EXPECT_EQ(v.app.current_frame(), 0);
+  EXPECT_EQ(v.app.state().current_frame(), 0);
   // Space plays: 30 fps scene, 60 fps display, speed 1: one scene frame per two display frames.
   v.platform.press_key(ImGuiKey_Space);
   for (int i = 0; i < 20; ++i) v.app.frame();
-  EXPECT_NEAR(v.app.current_frame(), 10, 1);
+  EXPECT_NEAR(v.app.state().current_frame(), 10, 1);
   v.platform.press_key(ImGuiKey_Space);
   v.app.frame();
-  const int paused = v.app.current_frame();
+  const int paused = v.app.state().current_frame();
   for (int i = 0; i < 10; ++i) v.app.frame();
-  EXPECT_EQ(v.app.current_frame(), paused);
+  EXPECT_EQ(v.app.state().current_frame(), paused);
 }
 
 TEST(ViewerApp, ClickingAProjectedPointSelectsIt) {
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
-  v.app.set_frame(12);
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.state().set_frame(12);
   v.app.frame();
   v.app.frame();
   Vec3 pixel;
@@ -131,25 +131,25 @@ TEST(ViewerApp, ClickingAProjectedPointSelectsIt) {
   v.app.frame();
   v.platform.set_button(0, false);
   v.app.frame();
-  EXPECT_EQ(v.app.selected_point(), point);
-  EXPECT_TRUE(v.app.layers().neighborhoods);
+  EXPECT_EQ(v.app.state().selected_point(), point);
+  EXPECT_TRUE(v.app.state().layers().neighborhoods);
   // Same through pick() at another level: the index is the level's.
-  v.app.set_level(1);
-  EXPECT_EQ(v.app.selected_point(), -1);
+  v.app.state().set_level(1);
+  EXPECT_EQ(v.app.state().selected_point(), -1);
   const int level_point = visible_point(v.app, &pixel);
   ASSERT_GE(level_point, 0);
   EXPECT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
-  EXPECT_EQ(v.app.selected_point(), level_point);
+  EXPECT_EQ(v.app.state().selected_point(), level_point);
   // Empty sky picks nothing and keeps the selection.
   EXPECT_FALSE(v.app.pick(kWidth - 2, 2));
-  EXPECT_EQ(v.app.selected_point(), level_point);
+  EXPECT_EQ(v.app.state().selected_point(), level_point);
 }
 
 TEST(ViewerApp, DraggingOrbitsInsteadOfPicking) {
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.frame();
-  const double yaw = v.app.camera().yaw_deg;
+  const double yaw = v.app.state().camera().yaw_deg;
   v.platform.move_mouse(600, 300);
   v.app.frame();
   v.platform.set_button(0, true);
@@ -160,12 +160,12 @@ TEST(ViewerApp, DraggingOrbitsInsteadOfPicking) {
   }
   v.platform.set_button(0, false);
   v.app.frame();
-  EXPECT_NE(v.app.camera().yaw_deg, yaw);
-  EXPECT_EQ(v.app.selected_point(), -1);
-  const double distance = v.app.camera().distance;
+  EXPECT_NE(v.app.state().camera().yaw_deg, yaw);
+  EXPECT_EQ(v.app.state().selected_point(), -1);
+  const double distance = v.app.state().camera().distance;
   v.platform.scroll(2.0f);
   v.app.frame();
-  EXPECT_NEAR(v.app.camera().distance, distance * 0.81, 1e-9);
+  EXPECT_NEAR(v.app.state().camera().distance, distance * 0.81, 1e-9);
 }
 
 TEST(ViewerApp, SavedViewRendersTheSameThroughTheRenderPath) {
@@ -173,15 +173,15 @@ TEST(ViewerApp, SavedViewRendersTheSameThroughTheRenderPath) {
   render::Image viewer_image;
   {
     HeadlessViewer v;
-    v.app.open_scene(testing::collide_scene());
-    v.app.set_level(1);
-    v.app.set_frame(15);
-    v.app.select_point(5);
-    v.app.layers().voxels = true;
+    v.app.state().open_scene(testing::collide_scene());
+    v.app.state().set_level(1);
+    v.app.state().set_frame(15);
+    v.app.state().select_point(5);
+    v.app.state().layers().voxels = true;
     v.app.set_ui_visible(false);
     v.app.frame();
     viewer_image = v.app.read_pixels();
-    v.app.save_view((dir / "view.json").string());
+    v.app.state().save_view((dir / "view.json").string());
   }
   const render::ViewSpec view = render::load_view_spec((dir / "view.json").string());
   EXPECT_EQ(view.frame, 15);
@@ -200,38 +200,39 @@ TEST(ViewerApp, SavedViewRendersTheSameThroughTheRenderPath) {
 
   // Reopening the saved view reproduces it.
   HeadlessViewer again;
-  again.app.open_scene(testing::collide_scene());
-  again.app.open_view((dir / "view.json").string());
-  EXPECT_EQ(render::view_spec_to_json(again.app.current_view()), render::view_spec_to_json(view));
+  again.app.state().open_scene(testing::collide_scene());
+  again.app.state().open_view((dir / "view.json").string());
+  EXPECT_EQ(render::view_spec_to_json(again.app.state().current_view()),
+            render::view_spec_to_json(view));
 }
 
 TEST(ViewerApp, BadFilesGiveClearErrorsAndKeepTheScene) {
   const fs::path dir = temp_dir("bad");
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   const std::string missing = (dir / "missing.h5").string();
   try {
-    v.app.open_scene(missing);
+    v.app.state().open_scene(missing);
     FAIL() << "no error for a missing file";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("missing.h5"), std::string::npos) << e.what();
   }
   std::ofstream(dir / "garbage.h5") << "not hdf5";
-  EXPECT_THROW(v.app.open_scene((dir / "garbage.h5").string()), Error);
+  EXPECT_THROW(v.app.state().open_scene((dir / "garbage.h5").string()), Error);
   std::ofstream(dir / "bad.json") << "{\"frame\": \"x\"}";
   try {
-    v.app.open_view((dir / "bad.json").string());
+    v.app.state().open_view((dir / "bad.json").string());
     FAIL() << "no error for a bad view";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
   }
   std::ofstream(dir / "far.json") << "{\"frame\": 500}";
-  EXPECT_THROW(v.app.open_view((dir / "far.json").string()), ValueError);
-  EXPECT_TRUE(v.app.has_scene());
-  EXPECT_EQ(v.app.document().path, testing::collide_scene());
-  EXPECT_EQ(v.app.current_frame(), 0);
-  EXPECT_THROW(v.app.select_point(100000), ValueError);
-  EXPECT_THROW(v.app.set_level(7), ValueError);
+  EXPECT_THROW(v.app.state().open_view((dir / "far.json").string()), ValueError);
+  EXPECT_TRUE(v.app.state().has_scene());
+  EXPECT_EQ(v.app.state().document().path, testing::collide_scene());
+  EXPECT_EQ(v.app.state().current_frame(), 0);
+  EXPECT_THROW(v.app.state().select_point(100000), ValueError);
+  EXPECT_THROW(v.app.state().set_level(7), ValueError);
   // An action failing inside a frame becomes the popup's message, never an exception.
   v.app.request_screenshot((dir / "no_such_dir" / "shot.png").string());
   EXPECT_NO_THROW(v.app.frame());
@@ -242,7 +243,7 @@ TEST(ViewerApp, BadFilesGiveClearErrorsAndKeepTheScene) {
 TEST(ViewerApp, ScreenshotWritesTheWholeWindow) {
   const fs::path dir = temp_dir("shot");
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.frame();
   v.app.request_screenshot((dir / "shot.png").string());
   v.app.frame();

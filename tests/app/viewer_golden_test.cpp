@@ -54,20 +54,20 @@ render::Image settle(testing::HeadlessViewer& v) {
 
 TEST(ViewerGolden, NeighbourhoodInspector) {
   testing::HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
-  v.app.set_frame(9);
-  v.app.select_point(17);
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.state().set_frame(9);
+  v.app.state().select_point(17);
   expect_matches_golden(settle(v), "viewer_neighbourhood");
 }
 
 TEST(ViewerGolden, LevelBrowser) {
   testing::HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
-  v.app.set_frame(9);
-  v.app.set_level(1);
-  v.app.layers().voxels = true;
-  v.app.show_panel(Panel::kLevels);
-  v.app.show_panel(Panel::kObjects);
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.state().set_frame(9);
+  v.app.state().set_level(1);
+  v.app.state().layers().voxels = true;
+  v.app.state().show_panel(Panel::kLevels);
+  v.app.state().show_panel(Panel::kObjects);
   expect_matches_golden(settle(v), "viewer_levels");
 }
 
@@ -85,10 +85,10 @@ TEST(ViewerGolden, RolloutSideBySide) {
   const fs::path file = fs::temp_directory_path() / "dynscope_viewer_golden_rollout.h5";
   write_rollout(r, file.string());
   testing::HeadlessViewer v;
-  v.app.open_rollout(file.string());
-  v.app.set_rollout_mode(RolloutMode::kSideBySide);
-  v.app.set_frame(40);
-  v.app.show_panel(Panel::kContacts);
+  v.app.state().open_rollout(file.string());
+  v.app.state().set_rollout_mode(RolloutMode::kSideBySide);
+  v.app.state().set_frame(40);
+  v.app.state().show_panel(Panel::kContacts);
   expect_matches_golden(settle(v), "viewer_rollout");
 }
 

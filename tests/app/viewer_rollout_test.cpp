@@ -18,12 +18,15 @@
 #include "engine/io/scene_file.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/rollout_runner.h"
+#include "fake_model.h"
 #include "viewer_test_util.h"
 
 namespace dynscope::app::viewer {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::cv_rollout;
+using testing::FakeModel;
 using testing::HeadlessViewer;
 
 fs::path temp_dir(const std::string& name) {
@@ -31,20 +34,6 @@ fs::path temp_dir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
-}
-
-// A constant-velocity rollout of `scene` (torch-free), observed for 3 frames.
-Rollout cv_rollout(const Scene& scene, const std::string& scene_path) {
-  SamplingOptions sampling;
-  sampling.voxel = 0.1;
-  const ModelPoints points = build_model_points(scene, sampling);
-  RolloutOptions options;
-  options.observed_frames = 3;
-  options.floor_clamp = true;
-  Rollout r = run_rollout(scene, points, constant_velocity_predictor(9.81, scene.dt_s), options);
-  r.scene_path = scene_path;
-  r.sampling_voxel = points.voxel;
-  return r;
 }
 
 const Scene& collide() {
@@ -69,7 +58,7 @@ std::string collide_rollout_file() {
 // Frames until no background job runs (at most `limit`).
 void settle_jobs(HeadlessViewer& v, std::chrono::seconds limit = std::chrono::seconds(20)) {
   const auto end = std::chrono::steady_clock::now() + limit;
-  while (v.app.busy() && std::chrono::steady_clock::now() < end) {
+  while (v.app.state().busy() && std::chrono::steady_clock::now() < end) {
     v.app.frame();
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -86,96 +75,15 @@ std::vector<std::vector<std::string>> layer_names(const ViewerApp& app) {
   return out;
 }
 
-// A model that rolls out with constant velocity and traces a hand-made hierarchy: level 0 is a
-// point cloud of the frame with kNN lists, and the picked point's filter weights are
-// |h_k| = k + 1 over the same-object list. rollout() can be held until release().
-class FakeModel : public ModelServices {
- public:
-  Rollout rollout(const RolloutRequest& request, Progress* progress) override {
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      ++rollouts_started_;
-      started_.notify_all();
-      released_.wait(lock, [&] { return !hold_; });
-    }
-    Rollout r = cv_rollout(request.scene, request.scene_path);
-    if (progress) progress->advance(r.num_frames() - r.observed_frames);
-    r.checkpoint_path = request.checkpoint;
-    return r;
-  }
-  ModelTrace trace(const std::string& checkpoint, const Scene& scene, const std::string& path,
-                   int frame, int level, int picked) override {
-    ++traces_;
-    PointCloudOptions options;
-    options.voxel = 0.1;
-    const ScenePointCloud cloud = build_point_cloud(scene, options);
-    ModelTrace t;
-    t.scene_path = path;
-    t.checkpoint_path = checkpoint;
-    t.frame = frame;
-    TraceLevel l;
-    l.points = cloud.positions(scene, frame);
-    l.object_ids = cloud.object_id;
-    l.radius = 0.2;
-    const NeighborList same = knn_same_object(l.points, l.object_ids, l.points, l.object_ids, kK);
-    const NeighborList rel =
-        knn_other_objects(l.points, l.object_ids, l.points, l.object_ids, kK, l.radius);
-    l.lists.push_back({"same", 0, 0, same.index, same.mask});
-    l.lists.push_back({"relational", 0, 0, rel.index, rel.mask});
-    t.levels.push_back(l);
-    if (level != 0) throw ValueError("level", "the fake model has one level");
-    if (picked >= 0) {
-      TraceQuery q;
-      q.point = picked;
-      q.conv = "unet.stem.0.object.conv";
-      q.list = "0/same";
-      q.query_index = picked;
-      for (int k = 0; k < kK; ++k) {
-        q.neighbors.push_back(same.index(picked, k));
-        q.mask.push_back(same.mask(picked, k));
-      }
-      q.weights = Eigen::MatrixXd::Zero(kK, 2);
-      for (int k = 0; k < kK; ++k) q.weights(k, 0) = k + 1.0;
-      t.queries.push_back(q);
-    }
-    TraceFeatures f;
-    f.block = "input";
-    f.norms.assign(static_cast<size_t>(l.points.rows()), 1.5);
-    t.features.push_back(f);
-    return t;
-  }
-  void hold() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    hold_ = true;
-  }
-  void release() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    hold_ = false;
-    released_.notify_all();
-  }
-  void wait_started(int n) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    started_.wait(lock, [&] { return rollouts_started_ >= n; });
-  }
-  static constexpr int kK = 6;
-  std::atomic<int> traces_{0};
-
- private:
-  std::mutex mutex_;
-  std::condition_variable released_, started_;
-  bool hold_ = false;
-  int rollouts_started_ = 0;
-};
-
 TEST(ViewerRollout, ShowsFrameKsPredictedPointsAtFrameK) {
   HeadlessViewer v;
-  v.app.open_file(collide_rollout_file());
-  ASSERT_TRUE(v.app.has_rollout());
-  EXPECT_TRUE(v.app.has_scene());  // the scene it names was opened too (meshes)
-  v.app.set_rollout_mode(RolloutMode::kPrediction);
+  v.app.state().open_file(collide_rollout_file());
+  ASSERT_TRUE(v.app.state().has_rollout());
+  EXPECT_TRUE(v.app.state().has_scene());  // the scene it names was opened too (meshes)
+  v.app.state().set_rollout_mode(RolloutMode::kPrediction);
   const Rollout& r = collide_rollout();
   for (int k : {0, 17, r.num_frames() - 1}) {
-    v.app.set_frame(k);
+    v.app.state().set_frame(k);
     v.app.frame();
     const std::vector<Viewport> ports = v.app.viewports();
     ASSERT_EQ(ports.size(), 1u);
@@ -193,34 +101,34 @@ TEST(ViewerRollout, ShowsFrameKsPredictedPointsAtFrameK) {
 
 TEST(ViewerRollout, ModesChangeTheLayersDrawn) {
   HeadlessViewer v;
-  v.app.open_rollout(collide_rollout_file());
-  v.app.set_frame(30);
+  v.app.state().open_rollout(collide_rollout_file());
+  v.app.state().set_frame(30);
   using Names = std::vector<std::vector<std::string>>;
-  v.app.set_rollout_mode(RolloutMode::kPrediction);
+  v.app.state().set_rollout_mode(RolloutMode::kPrediction);
   EXPECT_EQ(layer_names(v.app), (Names{{"prediction"}}));
-  v.app.set_rollout_mode(RolloutMode::kTruth);
+  v.app.state().set_rollout_mode(RolloutMode::kTruth);
   EXPECT_EQ(layer_names(v.app), (Names{{"truth"}}));
-  v.app.set_rollout_mode(RolloutMode::kGhost);
+  v.app.state().set_rollout_mode(RolloutMode::kGhost);
   EXPECT_EQ(layer_names(v.app), (Names{{"prediction", "truth (ghost)"}}));
-  v.app.set_rollout_mode(RolloutMode::kSideBySide);
+  v.app.state().set_rollout_mode(RolloutMode::kSideBySide);
   EXPECT_EQ(layer_names(v.app), (Names{{"truth"}, {"prediction"}}));
   // Side by side: two viewports, the same camera shifted apart, both drawn into one image.
   const std::vector<Viewport> ports = v.app.viewports();
-  EXPECT_EQ(ports[0].x1, ports[1].x0);
+  EXPECT_EQ(ports[0].rect.x + ports[0].rect.width, ports[1].rect.x);
   EXPECT_EQ(ports[0].camera.yaw_deg, ports[1].camera.yaw_deg);
   EXPECT_EQ(ports[0].camera.distance, ports[1].camera.distance);
   v.app.set_ui_visible(false);
   v.app.frame();
   const render::Image split = v.app.read_pixels();
-  v.app.set_rollout_mode(RolloutMode::kPrediction);
+  v.app.state().set_rollout_mode(RolloutMode::kPrediction);
   v.app.frame();
   EXPECT_LT(render::compare_images(split, v.app.read_pixels(), 8).fraction_within, 0.99);
   // Error colours follow the range: manual range reaches the layer.
-  v.app.set_rollout_mode(RolloutMode::kPrediction);
-  render::ViewSpec view = v.app.current_view();
+  v.app.state().set_rollout_mode(RolloutMode::kPrediction);
+  render::ViewSpec view = v.app.state().current_view();
   view.auto_range = false;
   view.range_max = 0.25f;
-  v.app.set_view(view);
+  v.app.state().set_view(view);
   const render::PointLayer& p = v.app.viewports()[0].scene.points[0];
   EXPECT_EQ(p.coloring, render::PointColoring::kScalar);
   EXPECT_FLOAT_EQ(p.range_max, 0.25f);
@@ -228,35 +136,35 @@ TEST(ViewerRollout, ModesChangeTheLayersDrawn) {
 
 TEST(ViewerRollout, ScrubbingAddsNoUploads) {
   HeadlessViewer v;
-  v.app.open_rollout(collide_rollout_file());
-  v.app.set_rollout_mode(RolloutMode::kSideBySide);
+  v.app.state().open_rollout(collide_rollout_file());
+  v.app.state().set_rollout_mode(RolloutMode::kSideBySide);
   v.app.frame();
   const int64_t uploads = v.app.upload_count();
   for (int k : {5, 20, 40, 59, 0}) {
-    v.app.set_frame(k);
+    v.app.state().set_frame(k);
     v.app.frame();
   }
-  v.app.set_rollout_mode(RolloutMode::kGhost);
+  v.app.state().set_rollout_mode(RolloutMode::kGhost);
   v.app.frame();
   EXPECT_EQ(v.app.upload_count(), uploads);
 }
 
 TEST(ViewerRollout, JumpToThresholdFindsTheFirstFrameOverIt) {
   HeadlessViewer v;
-  v.app.open_rollout(collide_rollout_file());
+  v.app.state().open_rollout(collide_rollout_file());
   const std::vector<double>& e = collide_rollout().point_error;
   const double threshold = 0.5 * *std::max_element(e.begin(), e.end());
   const int expected = first_frame_over(e, threshold);
   ASSERT_GT(expected, 0);
   EXPECT_LE(e[expected - 1], threshold);
-  v.app.set_error_threshold(threshold);
-  EXPECT_EQ(v.app.jump_to_error_threshold(), expected);
-  EXPECT_EQ(v.app.current_frame(), expected);
-  v.app.set_frame(2);
-  v.app.set_error_threshold(1e9);
-  EXPECT_EQ(v.app.jump_to_error_threshold(), -1);
-  EXPECT_EQ(v.app.current_frame(), 2);
-  v.app.show_panel(Panel::kContacts);
+  v.app.state().set_error_threshold(threshold);
+  EXPECT_EQ(v.app.state().jump_to_error_threshold(), expected);
+  EXPECT_EQ(v.app.state().current_frame(), expected);
+  v.app.state().set_frame(2);
+  v.app.state().set_error_threshold(1e9);
+  EXPECT_EQ(v.app.state().jump_to_error_threshold(), -1);
+  EXPECT_EQ(v.app.state().current_frame(), 2);
+  v.app.state().show_panel(Panel::kContacts);
   v.app.frame();
   v.app.frame();
   EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
@@ -265,48 +173,50 @@ TEST(ViewerRollout, JumpToThresholdFindsTheFirstFrameOverIt) {
 TEST(ViewerRollout, BadRolloutFileGivesAnErrorPopup) {
   const fs::path dir = temp_dir("bad");
   HeadlessViewer v;
-  v.app.open_scene(testing::collide_scene());
+  v.app.state().open_scene(testing::collide_scene());
   v.app.frame();
   std::ofstream(dir / "broken.h5") << "not hdf5";
   try {
-    v.app.open_rollout((dir / "broken.h5").string());
+    v.app.state().open_rollout((dir / "broken.h5").string());
     FAIL() << "no error for a corrupt rollout";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("broken.h5"), std::string::npos) << e.what();
   }
   // A scene file is HDF5 but not a rollout.
-  EXPECT_THROW(v.app.open_rollout(testing::collide_scene()), Error);
+  EXPECT_THROW(v.app.state().open_rollout(testing::collide_scene()), Error);
   // Opened from the Files section: the error becomes the popup, the scene stays, frames go on.
   v.app.request_open((dir / "broken.h5").string());
   EXPECT_NO_THROW(v.app.frame());
   EXPECT_NE(v.app.last_error().find("broken.h5"), std::string::npos) << v.app.last_error();
   EXPECT_NO_THROW(v.app.frame());
-  EXPECT_TRUE(v.app.has_scene());
-  EXPECT_FALSE(v.app.has_rollout());
-  EXPECT_EQ(v.app.document().path, testing::collide_scene());
+  EXPECT_TRUE(v.app.state().has_scene());
+  EXPECT_FALSE(v.app.state().has_rollout());
+  EXPECT_EQ(v.app.state().document().path, testing::collide_scene());
 }
 
 TEST(ViewerRollout, TraceDrivesTheInspector) {
   FakeModel model;
   HeadlessViewer v(&model);
   ViewerApp& app = v.app;
-  app.open_scene(testing::collide_scene());
-  app.set_checkpoint("fake.pt");
-  app.set_frame(12);
+  app.state().open_scene(testing::collide_scene());
+  app.state().set_checkpoint("fake.pt");
+  app.state().set_frame(12);
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while ((app.busy() || !app.shown_trace()) && std::chrono::steady_clock::now() < end) app.frame();
-  ASSERT_NE(app.shown_trace(), nullptr);
-  EXPECT_EQ(app.shown_trace()->frame, 12);
-  app.select_point(7);
-  while ((app.busy() || app.shown_trace()->queries.empty()) &&
+  while ((app.state().busy() || !app.state().shown_trace()) &&
+         std::chrono::steady_clock::now() < end)
+    app.frame();
+  ASSERT_NE(app.state().shown_trace(), nullptr);
+  EXPECT_EQ(app.state().shown_trace()->frame, 12);
+  app.state().select_point(7);
+  while ((app.state().busy() || app.state().shown_trace()->queries.empty()) &&
          std::chrono::steady_clock::now() < end) {
     app.frame();
   }
-  ASSERT_FALSE(app.shown_trace()->queries.empty());
-  const Neighborhood n = point_neighborhood(*app.active_data(), 7, 12, 16);
+  ASSERT_FALSE(app.state().shown_trace()->queries.empty());
+  const Neighborhood n = point_neighborhood(*app.state().active_data(), 7, 12, 16);
   EXPECT_EQ(n.k, FakeModel::kK);
   EXPECT_EQ(n.object_conv, "unet.stem.0.object.conv");
-  const TraceList& same = app.shown_trace()->levels[0].lists[0];
+  const TraceList& same = app.state().shown_trace()->levels[0].lists[0];
   ASSERT_FALSE(n.object.empty());
   // The listed neighbours are the trace's, each with its |h| (k + 1 for list column k).
   int listed = 0;
@@ -317,8 +227,8 @@ TEST(ViewerRollout, TraceDrivesTheInspector) {
     ++listed;
   }
   EXPECT_EQ(listed, static_cast<int>(n.object.size()));
-  app.show_panel(Panel::kInspector);
-  app.show_panel(Panel::kLevels);
+  app.state().show_panel(Panel::kInspector);
+  app.state().show_panel(Panel::kLevels);
   app.frame();
   app.frame();
   EXPECT_TRUE(app.last_error().empty()) << app.last_error();
@@ -328,27 +238,27 @@ TEST(ViewerRollout, WhatIfRunsInTheBackground) {
   FakeModel model;
   HeadlessViewer v(&model);
   ViewerApp& app = v.app;
-  app.open_scene(testing::collide_scene());
-  app.set_checkpoint("fake.pt");
+  app.state().open_scene(testing::collide_scene());
+  app.state().set_checkpoint("fake.pt");
   settle_jobs(v);
   ObjectEdit edit = object_initial_state(collide(), 2, 2);
   edit.velocity += Vec3(0.0, 0.5, 0.0);
   model.hold();
-  app.start_what_if(edit);
+  app.state().start_what_if(edit);
   model.wait_started(1);
   // The model is blocked: frames keep coming and the UI shows the job.
   for (int i = 0; i < 5; ++i) app.frame();
-  EXPECT_TRUE(app.busy());
-  EXPECT_FALSE(app.has_rollout());
+  EXPECT_TRUE(app.state().busy());
+  EXPECT_FALSE(app.state().has_rollout());
   model.release();
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (app.busy() && std::chrono::steady_clock::now() < end) app.frame();
-  ASSERT_TRUE(app.has_rollout()) << app.last_error();
-  ASSERT_NE(app.compared_rollout(), nullptr);
-  EXPECT_EQ(app.rollout_mode(), RolloutMode::kSideBySide);
+  while (app.state().busy() && std::chrono::steady_clock::now() < end) app.frame();
+  ASSERT_TRUE(app.state().has_rollout()) << app.last_error();
+  ASSERT_NE(app.state().compared_rollout(), nullptr);
+  EXPECT_EQ(app.state().rollout_mode(), RolloutMode::kSideBySide);
   // New vs original: same points at the observed start apart from the edited object's motion.
-  const Rollout& edited = app.rollout().rollout;
-  const Rollout& original = app.compared_rollout()->rollout;
+  const Rollout& edited = app.state().rollout().rollout;
+  const Rollout& original = app.state().compared_rollout()->rollout;
   EXPECT_GT((edited.predicted.back() - original.predicted.back()).norm(), 1e-3);
 }
 
@@ -356,19 +266,172 @@ TEST(ViewerRollout, TwoCheckpointsSideBySide) {
   FakeModel model;
   HeadlessViewer v(&model);
   ViewerApp& app = v.app;
-  app.open_scene(testing::collide_scene());
-  app.set_checkpoint("a.pt");
-  app.start_rollouts("b.pt");
+  app.state().open_scene(testing::collide_scene());
+  app.state().set_checkpoint("a.pt");
+  app.state().start_rollouts("b.pt");
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (app.busy() && std::chrono::steady_clock::now() < end) app.frame();
-  ASSERT_TRUE(app.has_rollout()) << app.last_error();
-  ASSERT_NE(app.compared_rollout(), nullptr);
-  EXPECT_EQ(app.rollout().rollout.checkpoint_path, "a.pt");
-  EXPECT_EQ(app.compared_rollout()->rollout.checkpoint_path, "b.pt");
+  while (app.state().busy() && std::chrono::steady_clock::now() < end) app.frame();
+  ASSERT_TRUE(app.state().has_rollout()) << app.last_error();
+  ASSERT_NE(app.state().compared_rollout(), nullptr);
+  EXPECT_EQ(app.state().rollout().rollout.checkpoint_path, "a.pt");
+  EXPECT_EQ(app.state().compared_rollout()->rollout.checkpoint_path, "b.pt");
   const std::vector<Viewport> ports = app.viewports();
   ASSERT_EQ(ports.size(), 2u);
-  EXPECT_EQ(ports[0].scene.points[0].series, app.compared_rollout()->series.prediction);
-  EXPECT_EQ(ports[1].scene.points[0].series, app.rollout().series.prediction);
+  EXPECT_EQ(ports[0].scene.points[0].series, app.state().compared_rollout()->series.prediction);
+  EXPECT_EQ(ports[1].scene.points[0].series, app.state().rollout().series.prediction);
+}
+
+// The point of `set` drawn nearest the eye in viewport `port` among those projecting into the
+// viewport's free part (not under the panels), with its pixel; -1 when none does.
+int nearest_drawn(const ViewerApp& app, int port, PickSet set, Vec3* pixel) {
+  const Viewport p = app.viewports()[static_cast<size_t>(port)];
+  const RolloutDocument& doc =
+      set == PickSet::kCompared ? *app.state().compared_rollout() : app.state().rollout();
+  const int f = app.state().current_frame();
+  const Points& at = set == PickSet::kTruth ? doc.rollout.truth[static_cast<size_t>(f)]
+                                            : doc.rollout.predicted[static_cast<size_t>(f)];
+  const int lo = std::max(p.rect.x, 400) + 10, hi = p.rect.x + p.rect.width - 10;
+  int best = -1;
+  for (Eigen::Index i = 0; i < at.rows(); ++i) {
+    const Vec3 s = p.camera.project(at.row(i).transpose(), testing::kWidth, testing::kHeight);
+    if (s.x() < lo || s.x() > hi || s.y() < 10 || s.y() > testing::kHeight - 140) continue;
+    if (best < 0 || s.z() < pixel->z()) {
+      best = static_cast<int>(i);
+      *pixel = s;
+    }
+  }
+  return best;
+}
+
+// Ghost mode draws the prediction opaque and the truth translucent: a click selects whichever
+// of the two is drawn in front at the pixel, and says which set and frame it was.
+TEST(ViewerPick, GhostModePicksThePredictionOrTheTruthDrawn) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_rollout_mode(RolloutMode::kGhost);
+  state.set_frame(40);
+  v.app.frame();
+  Vec3 pred_pixel = Vec3::Zero(), truth_pixel = Vec3::Zero();
+  const int pred = nearest_drawn(v.app, 0, PickSet::kPrediction, &pred_pixel);
+  const int truth = nearest_drawn(v.app, 0, PickSet::kTruth, &truth_pixel);
+  ASSERT_GE(pred, 0);
+  ASSERT_GE(truth, 0);
+  // The nearer of the two sets' nearest points is what a click at its centre hits.
+  const bool pred_first = pred_pixel.z() <= truth_pixel.z();
+  const Vec3 pixel = pred_first ? pred_pixel : truth_pixel;
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  Selection sel = state.selection();
+  EXPECT_EQ(sel.set, pred_first ? PickSet::kPrediction : PickSet::kTruth);
+  EXPECT_EQ(sel.point, pred_first ? pred : truth);
+  EXPECT_EQ(sel.frame, 40);
+  EXPECT_EQ(state.selected_point(), -1);  // no level point is selected with it
+  // Prediction-only mode: the prediction's nearest point is picked as the prediction.
+  state.set_rollout_mode(RolloutMode::kPrediction);
+  ASSERT_EQ(nearest_drawn(v.app, 0, PickSet::kPrediction, &pred_pixel), pred);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pred_pixel.x()), static_cast<int>(pred_pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  EXPECT_EQ(state.selection().point, pred);
+  // The selection follows scrubbing (points keep their identity) and remembers its frame.
+  state.set_frame(45);
+  EXPECT_EQ(state.selection().point, pred);
+  EXPECT_EQ(state.selection().frame, 40);
+  state.show_panel(Panel::kInspector);
+  v.app.frame();
+  v.app.frame();
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+  // Empty sky keeps it; clearing drops it.
+  EXPECT_FALSE(v.app.pick(testing::kWidth - 2, 2));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  state.select_point(-1);
+  EXPECT_TRUE(state.selection().empty());
+}
+
+TEST(ViewerPick, SideBySidePicksTheSetOfTheViewportClicked) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_rollout_mode(RolloutMode::kSideBySide);
+  state.set_frame(40);
+  v.app.frame();
+  Vec3 pixel = Vec3::Zero();
+  const int truth = nearest_drawn(v.app, 0, PickSet::kTruth, &pixel);
+  ASSERT_GE(truth, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kTruth);
+  EXPECT_EQ(state.selection().point, truth);
+  const int pred = nearest_drawn(v.app, 1, PickSet::kPrediction, &pixel);
+  ASSERT_GE(pred, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kPrediction);
+  EXPECT_EQ(state.selection().point, pred);
+  // Sets that are not shown, or points they do not have, are refused.
+  EXPECT_THROW(state.select(PickSet::kCompared, 0), ValueError);
+  EXPECT_THROW(
+      state.select(PickSet::kTruth, static_cast<int>(state.rollout().rollout.num_points())),
+      ValueError);
+  EXPECT_EQ(state.selection().point, pred);
+  // Replacing the rollout drops the selection.
+  state.open_rollout(collide_rollout_file());
+  EXPECT_TRUE(state.selection().empty());
+}
+
+// Frames 0..1 cannot be traced (the state reads p(t-2)): the level browser and inspector use the
+// model's trace of frame 2, the first it can trace, and its points can be picked there.
+TEST(ViewerPick, ObservedFrameUsesTheFirstTraceableFrame) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  state.open_scene(testing::collide_scene());
+  state.set_checkpoint("fake.pt");
+  state.set_frame(0);
+  EXPECT_EQ(state.trace_frame(), 2);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((state.busy() || !state.shown_trace()) && std::chrono::steady_clock::now() < end) {
+    v.app.frame();
+  }
+  ASSERT_NE(state.shown_trace(), nullptr) << v.app.last_error();
+  EXPECT_EQ(state.shown_trace()->frame, 2);
+  EXPECT_EQ(state.current_frame(), 0);
+  EXPECT_EQ(state.level_frame(), 2);
+  const std::vector<Viewport> ports = v.app.viewports();
+  ASSERT_EQ(ports.size(), 1u);
+  EXPECT_NE(ports[0].caption.find("frame 2"), std::string::npos) << ports[0].caption;
+  // Picking reads the trace's level points, drawn at frame 2.
+  const Points p = state.shown_trace()->levels[0].points;
+  int best = -1;
+  Vec3 pixel = Vec3::Zero();
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const Vec3 s = state.camera().project(p.row(i).transpose(), testing::kWidth, testing::kHeight);
+    if (s.x() < 400 || s.x() > testing::kWidth - 10 || s.y() < 10 ||
+        s.y() > testing::kHeight - 80) {
+      continue;
+    }
+    if (best < 0 || s.z() < pixel.z()) {
+      best = static_cast<int>(i);
+      pixel = s;
+    }
+  }
+  ASSERT_GE(best, 0);
+  ASSERT_TRUE(v.app.pick(static_cast<int>(pixel.x()), static_cast<int>(pixel.y())));
+  EXPECT_EQ(state.selection().set, PickSet::kLevel);
+  EXPECT_EQ(state.selection().point, best);
+  EXPECT_EQ(state.selection().frame, 2);
+  state.show_panel(Panel::kInspector);
+  v.app.frame();
+  v.app.frame();
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+  // Frame 1 reads the same trace; frame 5 is traced as itself.
+  state.set_frame(1);
+  EXPECT_NE(state.shown_trace(), nullptr);
+  state.set_frame(5);
+  EXPECT_EQ(state.trace_frame(), 5);
+  EXPECT_EQ(state.shown_trace(), nullptr);
+  // Without a checkpoint every frame is its own.
+  state.set_checkpoint("");
+  state.set_frame(0);
+  EXPECT_EQ(state.trace_frame(), 0);
+  EXPECT_EQ(state.level_frame(), 0);
 }
 
 TEST(InitialStateEdit, StateReadsBackAndHistoryMovesRigidly) {

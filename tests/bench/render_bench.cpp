@@ -1,4 +1,5 @@
-// Renderer throughput on OSMesa at 1280x720: 10k / 100k sphere impostors, with and without meshes.
+// Renderer throughput on OSMesa at 1280x720: 10k / 100k / 1M points as sphere impostors or flat
+// discs, with and without meshes.
 #include <benchmark/benchmark.h>
 
 #include "engine/core/rng.h"
@@ -15,10 +16,11 @@ GlContext& context() {
   return *c;
 }
 
-// args: number of points, mesh layer (0/1), multisampling samples.
+// args: number of points, mesh layer (0/1), multisampling samples, style (1 spheres, 2 discs).
 void BM_RenderFrame(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const bool meshes = state.range(1) != 0;
+  const PointStyle style = state.range(3) == 2 ? PointStyle::kDiscs : PointStyle::kSpheres;
   Renderer renderer(context(), static_cast<int>(state.range(2)));
   Rng rng(1);
   // Ten frames of a drifting cloud: the loop scrubs through them like the viewer does.
@@ -29,6 +31,7 @@ void BM_RenderFrame(benchmark::State& state) {
   }
   auto series = make_point_series(frames);
   RenderScene scene;
+  scene.point_style = style;
   PointLayer layer;
   layer.series = series;
   layer.radius = n > 50000 ? 0.01f : 0.02f;
@@ -58,13 +61,17 @@ void BM_RenderFrame(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_RenderFrame)
-    ->ArgNames({"points", "meshes", "samples"})
-    ->Args({10000, 0, 0})
-    ->Args({10000, 1, 0})
-    ->Args({100000, 0, 0})
-    ->Args({100000, 1, 0})
-    ->Args({10000, 1, 4})
-    ->Args({100000, 1, 4})
+    ->ArgNames({"points", "meshes", "samples", "style"})
+    ->Args({10000, 0, 0, 1})
+    ->Args({10000, 1, 0, 1})
+    ->Args({100000, 0, 0, 1})
+    ->Args({100000, 1, 0, 1})
+    ->Args({10000, 1, 4, 1})
+    ->Args({100000, 1, 4, 1})
+    ->Args({100000, 0, 0, 2})
+    ->Args({100000, 1, 0, 2})
+    ->Args({100000, 1, 4, 2})
+    ->Args({1000000, 0, 0, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

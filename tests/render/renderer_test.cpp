@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "engine/core/error.h"
 #include "render/scene_adapter.h"
 #include "render_test_util.h"
@@ -172,6 +174,79 @@ TEST(Renderer, InconsistentSceneIsAValueError) {
   } catch (const ValueError& e) {
     EXPECT_NE(std::string(e.what()).find("'bad'"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace dynscope::render
+
+namespace dynscope::render {
+namespace {
+
+// A disc covers about the area of the sphere's silhouette at the same place, and picks the same
+// point; the style auto-switches above kDiscPointThreshold points.
+TEST(Renderer, DiscsCoverTheSphereSilhouetteAndPick) {
+  GlContext& context = testing::osmesa(160, 120);
+  Renderer renderer(context, 0);
+  Points p(1, 3);
+  p.row(0) = Eigen::RowVector3d(0.2, 0.0, 0.5);
+  const auto series = make_point_series({p});
+  Camera camera;
+  camera.set_preset(ViewPreset::kFront);
+  camera.distance = 4;
+  RenderScene scene = moving_point_scene(series, 0);
+  scene.point_style = PointStyle::kSpheres;
+  int spheres = 0, discs = 0;
+  const Eigen::Vector2d a =
+      centroid_of_non_background(renderer.render_image(scene, camera), scene.background, &spheres);
+  scene.point_style = PointStyle::kDiscs;
+  const Eigen::Vector2d b =
+      centroid_of_non_background(renderer.render_image(scene, camera), scene.background, &discs);
+  ASSERT_GT(spheres, 20);
+  EXPECT_NEAR(discs, spheres, 0.25 * spheres);
+  EXPECT_LT((a - b).norm(), 1.5);
+  const PickResult hit =
+      renderer.pick(scene, camera, static_cast<int>(b.x()), static_cast<int>(b.y()));
+  EXPECT_TRUE(hit.hit());
+  EXPECT_EQ(hit.point, 0);
+  EXPECT_FALSE(renderer.pick(scene, camera, 2, 2).hit());
+  EXPECT_EQ(scene.resolved_point_style(), PointStyle::kDiscs);
+  scene.point_style = PointStyle::kAuto;
+  EXPECT_EQ(scene.resolved_point_style(), PointStyle::kSpheres);
+  scene.points[0].series = make_point_series({Points::Zero(kDiscPointThreshold + 1, 3)});
+  EXPECT_EQ(scene.resolved_point_style(), PointStyle::kDiscs);
+  EXPECT_EQ(parse_point_style("discs"), PointStyle::kDiscs);
+  EXPECT_THROW(parse_point_style("cubes"), ValueError);
+}
+
+// Values are checked when a series is uploaded (once), sizes on every frame.
+TEST(Renderer, NonFiniteSeriesIsRejectedAtUpload) {
+  GlContext& context = testing::osmesa(64, 48);
+  Renderer renderer(context, 0);
+  Points p = Points::Zero(3, 3);
+  p(1, 2) = std::nan("");
+  const RenderScene scene = moving_point_scene(make_point_series({p}), 0);
+  EXPECT_NO_THROW(scene.validate());  // O(1) per frame: sizes only
+  EXPECT_THROW(renderer.render(scene, Camera()), ValueError);
+}
+
+// A viewport rectangle limits clearing and drawing to itself.
+TEST(Renderer, ViewportRectLimitsTheImage) {
+  GlContext& context = testing::osmesa(80, 40);
+  Renderer renderer(context, 0);
+  RenderScene red, blue;
+  red.grid.visible = blue.grid.visible = false;
+  red.background = Color(1.0f, 0.0f, 0.0f);
+  blue.background = Color(0.0f, 0.0f, 1.0f);
+  renderer.render(red, Camera(), Rect{0, 0, 40, 40});
+  renderer.render(blue, Camera(), Rect{40, 0, 40, 40});
+  const Image image = context.read_pixels();
+  EXPECT_EQ(image.pixel(10, 20)[0], 255);
+  EXPECT_EQ(image.pixel(10, 20)[2], 0);
+  EXPECT_EQ(image.pixel(70, 20)[0], 0);
+  EXPECT_EQ(image.pixel(70, 20)[2], 255);
+  EXPECT_THROW(renderer.render(red, Camera(), Rect{60, 0, 40, 40}), ValueError);
+  EXPECT_EQ(find_rect(45, 3, {Rect{0, 0, 40, 40}, Rect{40, 0, 40, 40}}), 1);
+  EXPECT_EQ(find_rect(95, 3, {Rect{0, 0, 40, 40}}), -1);
 }
 
 }  // namespace

@@ -1,0 +1,634 @@
+// ViewerState: documents, view, timeline, checkpoint and ticketed background jobs.
+#include "app/viewer/viewer_state.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "engine/core/error.h"
+#include "engine/io/rollout_file.h"
+#include "engine/io/scene_file.h"
+#include "engine/io/trace_file.h"
+#include "engine/model/model_config.h"
+#include "engine/rollout/rollout_runner.h"
+#include "engine/rollout/state_history.h"
+#include "render/batch_render.h"
+
+namespace dynscope::app::viewer {
+namespace {
+
+constexpr float kPanelWidth = 370.0f;
+constexpr float kTimelineHeight = 58.0f;
+constexpr float kErrorStripHeight = 64.0f;  // added under the timeline while a rollout is shown
+
+std::string file_name(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+// The scene a rollout started from (find_rollout_scene), or none when it is not found;
+// a scene that exists but cannot be read throws, naming it.
+std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& rollout_path) {
+  const std::string path = find_rollout_scene(rollout, rollout_path);
+  if (path.empty()) return std::nullopt;
+  return read_scene(path);
+}
+
+}  // namespace
+
+const char* pick_set_name(PickSet set) {
+  switch (set) {
+    case PickSet::kLevel:
+      return "level points";
+    case PickSet::kPrediction:
+      return "prediction";
+    case PickSet::kTruth:
+      return "truth";
+    case PickSet::kCompared:
+      return "compared prediction";
+    case PickSet::kNone:
+      break;
+  }
+  return "";
+}
+
+float panel_width(const WindowLayout& layout) { return layout.ui_visible ? kPanelWidth : 0.0f; }
+
+float timeline_height(const WindowLayout& layout, bool has_rollout) {
+  if (!layout.ui_visible) return 0.0f;
+  return kTimelineHeight + (has_rollout ? kErrorStripHeight : 0.0f);
+}
+
+ViewerState::ViewerState(ModelServices* services) : services_(services) {
+  if (services_) cache_ = std::make_shared<ModelCache>(*services_);
+  view_.layers.level_points = true;
+}
+
+ViewerState::~ViewerState() { cancel_jobs(); }
+
+void ViewerState::replaced() {
+  ++generation_;
+  cancel_jobs();
+  drawn_pick_ = Selection{};
+}
+
+void ViewerState::cancel_jobs() {
+  // A cancelled job's thread may still run: it is kept (and reaped once done) so the UI thread
+  // never waits for it, and its result is never installed.
+  if (rollout_job_) {
+    rollout_job_->cancel();
+    retired_rollouts_.push_back(std::move(rollout_job_));
+  }
+  if (trace_job_) {
+    trace_job_->cancel();
+    retired_traces_.push_back(std::move(trace_job_));
+  }
+  rollout_input_ = RolloutJobInput{};
+}
+
+void ViewerState::reap_retired() {
+  auto reap = [this](auto& jobs) {
+    for (auto it = jobs.begin(); it != jobs.end();) {
+      if (!(*it)->done()) {
+        ++it;
+        continue;
+      }
+      ++dropped_;
+      it = jobs.erase(it);
+    }
+  };
+  reap(retired_rollouts_);
+  reap(retired_traces_);
+}
+
+const SceneDocument& ViewerState::document() const {
+  if (!doc_) throw ValueError("scene", "no scene is loaded");
+  return *doc_;
+}
+
+void ViewerState::open_scene(const std::string& path) { set_scene(read_scene(path), path); }
+
+void ViewerState::set_scene(const Scene& scene, const std::string& path) {
+  scene.validate();
+  auto doc = std::make_unique<SceneDocument>();
+  doc->path = path;
+  doc->scene = scene;
+  render::ViewSpec build = view_;
+  build.layers.level_points = true;
+  build.picked_point = -1;
+  build.frame = 0;
+  doc->data = std::make_unique<render::SceneRenderData>(doc->scene, build);
+  doc->contact_distance = contact_distances(doc->scene, doc->data->cloud());
+  replaced();
+  doc_ = std::move(doc);
+  data_level_ = view_.level;
+  rollout_.reset();
+  compare_.reset();
+  trace_.reset();
+  trace_data_.reset();
+  trace_from_file_ = false;
+  trace_failed_ = TraceWant{};
+  view_.layers.level_points = true;
+  view_.frame = 0;
+  view_.picked_point = -1;
+  timeline_ = Timeline{};
+  view_.camera.fit = true;
+  fit_camera();
+}
+
+void ViewerState::set_view(const render::ViewSpec& view) {
+  view.validate();
+  if (num_frames() > 0 && view.frame >= num_frames()) {
+    throw ValueError("frame", std::to_string(view.frame) + " is outside the " +
+                                  std::to_string(num_frames()) + " frames shown");
+  }
+  const render::ViewSpec previous = view_;
+  view_ = view;
+  // Voxel, radius or point size may differ: rebuild the level data from scratch.
+  data_level_ = -1;
+  try {
+    ensure_render_data();
+    if (doc_ && view_.picked_point >= doc_->data->level_size()) {
+      throw ValueError("picked_point",
+                       std::to_string(view_.picked_point) + " is outside the level's points");
+    }
+  } catch (...) {
+    view_ = previous;
+    data_level_ = -1;
+    ensure_render_data();
+    throw;
+  }
+  if (view_.camera.fit) fit_camera();
+  if (view_.picked_point >= 0) show_panel(Panel::kInspector);
+  if (view_.level > 0 || view_.layers.voxels) show_panel(Panel::kLevels);
+}
+
+void ViewerState::open_view(const std::string& path) { set_view(render::load_view_spec(path)); }
+
+render::ViewSpec ViewerState::current_view() const {
+  render::ViewSpec v = view_;
+  v.width = layout_.width;
+  v.height = layout_.height;
+  v.camera.fit = false;
+  v.camera.preset.clear();
+  return v;
+}
+
+void ViewerState::save_view(const std::string& path) const {
+  render::save_view_spec(current_view(), path);
+}
+
+int ViewerState::num_frames() const {
+  if (rollout_) return rollout_->num_frames();
+  return doc_ ? doc_->scene.num_frames() : 0;
+}
+
+double ViewerState::frame_dt_s() const {
+  if (rollout_) return rollout_->rollout.dt_s;
+  return doc_ ? doc_->scene.dt_s : 0.0;
+}
+
+int ViewerState::observed_frames() const {
+  return rollout_ ? rollout_->rollout.observed_frames : RolloutOptions{}.observed_frames;
+}
+
+void ViewerState::set_frame(int frame) {
+  if (num_frames() == 0) return;
+  const int clamped = std::clamp(frame, 0, num_frames() - 1);
+  const int traced = trace_frame();
+  view_.frame = clamped;
+  // Level points of a model trace are the hierarchy of one frame; only level-0 points (the
+  // model's points) keep their index from frame to frame.
+  if (trace_frame() != traced && !checkpoint_.empty() && view_.level > 0) view_.picked_point = -1;
+}
+
+int ViewerState::trace_frame() const {
+  if (checkpoint_.empty()) return view_.frame;
+  return std::max(view_.frame, kFirstTraceableFrame);
+}
+
+int ViewerState::level_frame() const { return shown_trace() ? trace_->frame : view_.frame; }
+
+void ViewerState::select_point(int point) {
+  if (point >= 0) {
+    ensure_render_data();
+    const render::SceneRenderData* data = active_data();
+    const int n = data ? data->level_size() : 0;
+    if (point >= n) {
+      throw ValueError("picked_point", std::to_string(point) + " is outside the " +
+                                           std::to_string(n) + " points of level " +
+                                           std::to_string(view_.level));
+    }
+    view_.layers.neighborhoods = true;
+    show_panel(Panel::kInspector);
+  }
+  drawn_pick_ = Selection{};
+  view_.picked_point = std::max(point, -1);
+}
+
+void ViewerState::select(PickSet set, int point) {
+  if (set == PickSet::kNone || point < 0) {
+    select_point(-1);
+    return;
+  }
+  if (set == PickSet::kLevel) {
+    select_point(point);
+    return;
+  }
+  const RolloutDocument* doc = set == PickSet::kCompared ? compare_.get() : rollout_.get();
+  if (!doc) {
+    throw ValueError("pick", std::string("no ") + pick_set_name(set) + " is shown");
+  }
+  const int n = static_cast<int>(doc->rollout.num_points());
+  if (point >= n) {
+    throw ValueError("picked_point", std::to_string(point) + " is outside the " +
+                                         std::to_string(n) + " points of the " +
+                                         pick_set_name(set));
+  }
+  view_.picked_point = -1;
+  drawn_pick_ = {set, point, view_.frame};
+  show_panel(Panel::kInspector);
+}
+
+Selection ViewerState::selection() const {
+  if (!drawn_pick_.empty()) return drawn_pick_;
+  if (view_.picked_point >= 0) return {PickSet::kLevel, view_.picked_point, level_frame()};
+  return {};
+}
+
+int ViewerState::num_levels() const {
+  // The model's own count: the trace's levels, else those of the config whose hierarchy the level
+  // browser previews for this scene.
+  if (trace_) return static_cast<int>(trace_->levels.size());
+  if (doc_) return ModelConfig::preset(hierarchy_preset(doc_->scene)).levels;
+  return ModelConfig{}.levels;
+}
+
+std::vector<LevelCount> ViewerState::level_counts() const {
+  if (const ModelTrace* trace = shown_trace()) return trace_level_counts(*trace);
+  if (!doc_ || view_.frame >= doc_->scene.num_frames()) return {};
+  auto cached = doc_->level_counts.find(view_.frame);
+  if (cached == doc_->level_counts.end()) {
+    cached = doc_->level_counts
+                 .emplace(view_.frame,
+                          viewer::level_counts(doc_->scene, doc_->data->cloud(), view_.frame))
+                 .first;
+  }
+  return cached->second;
+}
+
+void ViewerState::set_level(int level) {
+  const int last = num_levels() - 1;
+  if (level < 0 || level > last) {
+    throw ValueError("level", std::to_string(level) + " is outside 0.." + std::to_string(last));
+  }
+  if (level == view_.level) return;
+  view_.level = level;
+  view_.picked_point = -1;  // indices of another level's points mean nothing here
+  ensure_render_data();
+}
+
+void ViewerState::set_point_style(const std::string& style) {
+  render::parse_point_style(style);
+  view_.point_style = style;
+}
+
+void ViewerState::set_error_range(bool automatic, float lo, float hi) {
+  view_.auto_range = automatic;
+  view_.range_min = lo;
+  view_.range_max = std::max(hi, lo + 1e-6f);
+}
+
+void ViewerState::open_file(const std::string& path) {
+  if (is_rollout_file(path)) {
+    open_rollout(path);
+  } else if (is_trace_file(path)) {
+    open_trace(path);
+  } else {
+    open_scene(path);
+  }
+}
+
+void ViewerState::open_rollout(const std::string& path) {
+  const Rollout rollout = read_rollout(path);
+  try {
+    rollout.validate();
+  } catch (const Error& e) {
+    throw ValueError("rollout", path + ": " + e.what());
+  }
+  if (rollout.num_frames() == 0) throw FormatError(path, "positions", "the rollout has no frames");
+  const std::optional<Scene> scene = rollout_scene(rollout, path);
+  if (scene) set_scene(*scene, rollout.scene_path);
+  set_rollout(rollout, path, scene ? &*scene : nullptr);
+}
+
+void ViewerState::set_rollout(const Rollout& rollout, const std::string& label,
+                              const Scene* scene) {
+  std::unique_ptr<RolloutDocument> doc = make_rollout_document(rollout, label, scene);
+  replaced();
+  if (!scene) {
+    // No scene to go with it: scene panels and level layers have nothing to read.
+    doc_.reset();
+    trace_.reset();
+    trace_data_.reset();
+  }
+  rollout_ = std::move(doc);
+  compare_.reset();
+  // One voxel of mean error: the points have drifted by their own spacing.
+  error_threshold_ =
+      rollout.sampling_voxel > 0 ? rollout.sampling_voxel : 0.5 * rollout_->max_error();
+  const render::ViewLayers defaults = render::default_rollout_layers();
+  view_.layers.error = defaults.error;
+  view_.layers.level_points = false;
+  view_.layers.voxels = false;
+  view_.layers.neighborhoods = false;
+  view_.layers.ground_truth = false;
+  view_.picked_point = -1;
+  view_.frame = std::min(view_.frame, rollout_->num_frames() - 1);
+  if (rollout_mode_ == RolloutMode::kSideBySide) rollout_mode_ = RolloutMode::kGhost;
+  timeline_ = Timeline{};
+  fit_camera();
+  show_panel(Panel::kRollout);
+}
+
+void ViewerState::set_compared_rollout(const Rollout& other, const std::string& label) {
+  if (!rollout_) throw ValueError("compared rollout", "no rollout is shown to compare with");
+  if (other.num_frames() < rollout_->num_frames()) {
+    throw ValueError("compared rollout", label + " has " + std::to_string(other.num_frames()) +
+                                             " frames, the shown rollout " +
+                                             std::to_string(rollout_->num_frames()));
+  }
+  compare_ = make_rollout_document(other, label, rollout_->scene ? &*rollout_->scene : nullptr);
+  if (drawn_pick_.set == PickSet::kCompared) drawn_pick_ = Selection{};
+  fit_camera();
+}
+
+const RolloutDocument& ViewerState::rollout() const {
+  if (!rollout_) throw ValueError("rollout", "no rollout is shown");
+  return *rollout_;
+}
+
+void ViewerState::set_rollout_mode(RolloutMode mode) {
+  const bool refit =
+      (mode == RolloutMode::kSideBySide) != (rollout_mode_ == RolloutMode::kSideBySide);
+  rollout_mode_ = mode;
+  if (refit) fit_camera();
+}
+
+int ViewerState::jump_to_error_threshold() {
+  if (!rollout_) return -1;
+  const int f = first_frame_over(rollout_->rollout.point_error, error_threshold_);
+  if (f >= 0) set_frame(f);
+  return f;
+}
+
+void ViewerState::set_checkpoint(const std::string& checkpoint) {
+  if (!checkpoint.empty() && services_ == nullptr) {
+    throw ValueError("checkpoint", "this viewer has no model services to run " + checkpoint);
+  }
+  replaced();
+  checkpoint_ = checkpoint;
+  // Only the models in use stay loaded (a running job keeps its own alive until it ends).
+  if (cache_) cache_->forget_except({checkpoint_, compare_checkpoint_});
+  trace_.reset();
+  trace_data_.reset();
+  trace_from_file_ = false;
+  trace_failed_ = TraceWant{};
+  view_.picked_point = -1;
+  if (!checkpoint.empty()) view_.layers.level_points = true;
+}
+
+void ViewerState::open_trace(const std::string& path) {
+  auto trace = std::make_shared<const ModelTrace>(read_trace(path));
+  if (!doc_ || rollout_) {
+    if (trace->scene_path.empty() || !std::filesystem::is_regular_file(trace->scene_path)) {
+      throw IoError(path, "the trace's scene file '" + trace->scene_path +
+                              "' cannot be found; open the scene first");
+    }
+    open_scene(trace->scene_path);
+  }
+  if (trace->frame < 0 || trace->frame >= doc_->scene.num_frames()) {
+    throw FormatError(path, "frame",
+                      std::to_string(trace->frame) + " is not a frame of " + doc_->path);
+  }
+  replaced();
+  checkpoint_.clear();
+  const int level = std::min(view_.level, static_cast<int>(trace->levels.size()) - 1);
+  view_.level = std::max(level, 0);
+  ensure_render_data();
+  install_trace(trace, view_.level, -1);
+  trace_from_file_ = true;
+  view_.frame = trace->frame;
+  view_.picked_point = -1;
+  view_.layers.level_points = true;
+  show_panel(Panel::kLevels);
+}
+
+void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked) {
+  render::ViewSpec build = view_;
+  build.level = level;
+  build.layers.level_points = true;
+  build.layers.ground_truth = true;  // the "all points" layer stays available
+  build.picked_point = -1;
+  build.frame = trace->frame;
+  trace_data_ = std::make_unique<render::SceneRenderData>(doc_->scene, build, trace);
+  trace_ = std::move(trace);
+  trace_level_ = level;
+  trace_picked_ = picked;
+}
+
+const ModelTrace* ViewerState::shown_trace() const {
+  if (!trace_ || !trace_data_ || trace_->frame != trace_frame() || trace_level_ != view_.level) {
+    return nullptr;
+  }
+  return trace_.get();
+}
+
+const render::SceneRenderData* ViewerState::active_data() const {
+  if (shown_trace()) return trace_data_.get();
+  return doc_ ? doc_->data.get() : nullptr;
+}
+
+void ViewerState::start_rollouts(const std::string& compare) {
+  if (!services_ || checkpoint_.empty()) {
+    throw ValueError("rollout", "a checkpoint is needed (--checkpoint, or Model > Use)");
+  }
+  if (!doc_) throw ValueError("rollout", "no scene is loaded");
+  const int observed = observed_frames();
+  std::vector<RolloutRequest> requests = {{checkpoint_, doc_->scene, doc_->path, observed}};
+  if (!compare.empty()) requests.push_back({compare, doc_->scene, doc_->path, observed});
+  compare_checkpoint_ = compare;
+  rollout_input_ = RolloutJobInput{};
+  rollout_input_.scene = doc_->scene;
+  start_rollout_job(compare.empty() ? "rollout" : "rollouts", std::move(requests), std::nullopt);
+}
+
+void ViewerState::start_what_if(const ObjectEdit& edit) {
+  if (!services_ || checkpoint_.empty()) {
+    throw ValueError("what-if", "a checkpoint is needed (--checkpoint, or Model > Use)");
+  }
+  if (!doc_) throw ValueError("what-if", "no scene is loaded");
+  // The original is the shown rollout when it is this checkpoint's on this scene.
+  const bool have_original =
+      rollout_ && rollout_->rollout.checkpoint_path == checkpoint_ && rollout_->scene && !compare_;
+  const int observed = observed_frames();
+  Scene edited = apply_initial_state_edit(doc_->scene, edit, observed - 1);
+  std::vector<RolloutRequest> requests;
+  if (!have_original) requests.push_back({checkpoint_, doc_->scene, doc_->path, observed});
+  requests.push_back({checkpoint_, edited, doc_->path, observed});
+  RolloutJobInput input;
+  input.scene = doc_->scene;
+  if (have_original) input.original = rollout_->rollout;
+  rollout_input_ = std::move(input);
+  start_rollout_job("what-if", std::move(requests), std::move(edited));
+}
+
+void ViewerState::start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
+                                    std::optional<Scene> what_if_scene) {
+  if (rollout_job_) throw ValueError("rollout", "a " + rollout_job_->label() + " is running");
+  int64_t total = 0;
+  for (const RolloutRequest& r : requests) {
+    total += std::max(0, r.scene.num_frames() - r.observed_frames);
+  }
+  rollout_input_.what_if_scene = std::move(what_if_scene);
+  ModelServices* services = services_;
+  std::shared_ptr<ModelCache> cache = cache_;
+  rollout_job_ = std::make_unique<BackgroundJob<std::vector<Rollout>>>(
+      label, ticket(), total,
+      [services, cache, requests = std::move(requests)](JobControl& control) {
+        std::vector<Rollout> out;
+        for (const RolloutRequest& r : requests) {
+          control.check();
+          const std::shared_ptr<LoadedCheckpoint> model = cache->get(r.checkpoint);
+          out.push_back(services->rollout(*model, r, control));
+        }
+        return out;
+      });
+}
+
+void ViewerState::update_jobs() {
+  reap_retired();
+  if (rollout_job_ && rollout_job_->done()) {
+    const std::unique_ptr<BackgroundJob<std::vector<Rollout>>> job = std::move(rollout_job_);
+    RolloutJobInput input = std::move(rollout_input_);
+    rollout_input_ = RolloutJobInput{};
+    if (job->ticket() != ticket() || job->cancelled()) {
+      ++dropped_;  // cannot happen while replaced() retires jobs; kept as the rule's last guard
+    } else {
+      std::vector<Rollout> results = job->take();
+      if (input.what_if_scene) {
+        const Rollout original = input.original ? *input.original : results.front();
+        const Scene edited = std::move(*input.what_if_scene);
+        set_rollout(results.back(), "what-if of " + file_name(checkpoint_), &edited);
+        set_compared_rollout(original, "original");
+      } else {
+        const Scene* scene = input.scene ? &*input.scene : nullptr;
+        set_rollout(results[0], "rollout of " + file_name(results[0].checkpoint_path), scene);
+        if (results.size() > 1) {
+          set_compared_rollout(results[1], "rollout of " + file_name(results[1].checkpoint_path));
+        }
+      }
+      if (compare_) set_rollout_mode(RolloutMode::kSideBySide);
+    }
+  }
+  if (trace_job_ && trace_job_->done()) {
+    const std::unique_ptr<BackgroundJob<ModelTrace>> job = std::move(trace_job_);
+    if (job->ticket() != ticket() || job->cancelled() || !doc_) {
+      ++dropped_;
+    } else {
+      try {
+        auto trace = std::make_shared<const ModelTrace>(job->take());
+        install_trace(std::move(trace), trace_request_.level, trace_request_.picked);
+      } catch (...) {
+        trace_failed_ = trace_request_;
+        throw;
+      }
+    }
+  }
+  if (trace_from_file_ && trace_ && trace_level_ != view_.level &&
+      view_.level < static_cast<int>(trace_->levels.size())) {
+    install_trace(trace_, view_.level, -1);
+  }
+  if (checkpoint_.empty() || !services_ || !doc_ || trace_job_ ||
+      trace_frame() >= doc_->scene.num_frames()) {
+    return;
+  }
+  const TraceWant want{trace_frame(), view_.level, view_.picked_point};
+  const bool have = trace_ && trace_->frame == want.frame && trace_level_ == want.level &&
+                    trace_picked_ == want.picked;
+  if (have || trace_failed_ == want) return;
+  trace_request_ = want;
+  TraceRequest request{checkpoint_, std::make_shared<const Scene>(doc_->scene),
+                       doc_->path,  want.frame,
+                       want.level,  want.picked};
+  ModelServices* services = services_;
+  std::shared_ptr<ModelCache> cache = cache_;
+  trace_job_ = std::make_unique<BackgroundJob<ModelTrace>>(
+      "trace", ticket(), 1, [services, cache, request = std::move(request)](JobControl& control) {
+        const std::shared_ptr<LoadedCheckpoint> model = cache->get(request.checkpoint);
+        control.check();
+        return services->trace(*model, request, control);
+      });
+}
+
+void ViewerState::ensure_render_data() {
+  if (!doc_ || (doc_->data && data_level_ == view_.level)) return;
+  render::ViewSpec build = view_;
+  build.layers.level_points = true;  // points are always prepared so they can be picked
+  build.picked_point = -1;
+  build.frame = 0;
+  doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
+  data_level_ = view_.level;
+}
+
+void ViewerState::fit_camera(const std::string& preset) {
+  if (!preset.empty()) view_.camera.preset = preset;
+  if (!doc_ && !rollout_) return;
+  render::Camera& camera = view_.camera.camera;
+  if (!view_.camera.preset.empty()) camera.set_preset(render::parse_preset(view_.camera.preset));
+  const double w = layout_.width, h = std::max(1, layout_.height);
+  // Fit into the part of the window the panels leave free, then shift the view so the scene is
+  // centred there (the 3D view itself spans the whole window, behind the panels).
+  const double left = panel_width(layout_);
+  const double bottom = timeline_height(layout_, rollout_ != nullptr);
+  const bool split = rollout_ && rollout_mode_ == RolloutMode::kSideBySide;
+  const double vw = std::max(1.0, (w - left) / (split ? 2.0 : 1.0)), vh = std::max(1.0, h - bottom);
+  Aabb bounds;
+  if (rollout_) {
+    bounds = rollout_->bounds;
+    if (compare_) bounds.extend(compare_->bounds);
+  } else {
+    bounds = doc_->data->bounds(0, doc_->scene.num_frames() - 1);
+  }
+  camera.fit(bounds, vw / vh);
+  if (!bounds.empty()) {
+    const double radius = std::max(0.5 * (bounds.max - bounds.min).norm(), 1e-3);
+    const double tan_half = std::tan(camera.fov_deg * M_PI / 360.0);
+    const double half = std::min(std::atan(tan_half * vh / h), std::atan(tan_half * vw / h));
+    camera.distance = 1.1 * radius / std::sin(half);
+    camera.pan(-0.5 * left / h, -0.5 * bottom / h);
+  }
+  view_.camera.fit = false;
+  view_.camera.preset.clear();
+}
+
+void ViewerState::advance_playback(float dt_s) {
+  if (num_frames() == 0 || !timeline_.playing) return;
+  const int last = num_frames() - 1;
+  const double frame_s = frame_dt_s();
+  timeline_.accumulated_s += dt_s * timeline_.speed;
+  while (timeline_.accumulated_s >= frame_s) {
+    timeline_.accumulated_s -= frame_s;
+    if (view_.frame < last) {
+      ++view_.frame;
+    } else if (timeline_.loop) {
+      view_.frame = 0;
+    } else {
+      timeline_.playing = false;
+      timeline_.accumulated_s = 0.0;
+      break;
+    }
+  }
+}
+
+}  // namespace dynscope::app::viewer

@@ -1,0 +1,279 @@
+// ViewerState: the viewer's one state object (MuJoCo `simulate` style): documents, view, timeline,
+// checkpoint and the ticketed background jobs; only the UI thread changes it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/viewer/background_job.h"
+#include "app/viewer/initial_state_edit.h"
+#include "app/viewer/model_services.h"
+#include "app/viewer/rollout_document.h"
+#include "app/viewer/scene_inspection.h"
+#include "engine/scene/scene.h"
+#include "render/scene_adapter.h"
+#include "render/view_spec.h"
+
+namespace dynscope::app::viewer {
+
+/// Collapsible sections of the side panel.
+enum class Panel { kFiles, kDisplay, kRollout, kModel, kObjects, kContacts, kLevels, kInspector };
+
+/// Which drawn point set a click selects from.
+enum class PickSet { kNone, kLevel, kPrediction, kTruth, kCompared };
+
+/// "level points", "prediction", "truth", "compared prediction" ("" for none).
+const char* pick_set_name(PickSet set);
+
+/// What the user selected: a point of one drawn set. Level points index the shown level (of the
+/// frame level_frame() gives); rollout points index the rollout's points (identity kept over
+/// frames, so the selection follows scrubbing).
+struct Selection {
+  PickSet set = PickSet::kNone;
+  int point = -1;  ///< Index into that set.
+  int frame = -1;  ///< Frame it was picked at.
+  bool empty() const { return set == PickSet::kNone; }
+};
+
+/// Playback state of the timeline.
+struct Timeline {
+  bool playing = false;
+  float speed = 1.0f;  ///< Multiple of real time (scene dt_s per frame).
+  bool loop = true;
+  double accumulated_s = 0.0;  ///< Play time not yet turned into a frame step.
+};
+
+/// The window the state is laid out in: its size in pixels and whether the panels are shown
+/// (they cover a left column and a bottom strip; the 3D view spans the window behind them).
+struct WindowLayout {
+  int width = 1;
+  int height = 1;
+  bool ui_visible = true;
+};
+
+/// A loaded scene and what is derived from it once (the GPU-facing SceneRenderData for the view's
+/// level, contact distances). A shown rollout lives beside it in a RolloutDocument.
+struct SceneDocument {
+  std::string path;
+  Scene scene;
+  std::unique_ptr<render::SceneRenderData> data;
+  std::vector<double> contact_distance;  ///< `[T]` target–zone minimum distance, or empty.
+  /// Model hierarchy counts per frame (cache filled by ViewerState::level_counts).
+  mutable std::map<int, std::vector<LevelCount>> level_counts;
+};
+
+/// Everything the viewer shows and the jobs that feed it. Replacing a document (scene, rollout,
+/// trace) or the checkpoint bumps the generation: running jobs are cancelled and any result whose
+/// ticket is older is dropped, never installed. Errors of user actions are thrown (ValueError,
+/// IoError, FormatError naming the file or field); the state stays as it was on failure.
+class ViewerState {
+ public:
+  /// `services` (may be null; must outlive the state) runs the model for rollouts and traces.
+  explicit ViewerState(ModelServices* services = nullptr);
+  ~ViewerState();
+  ViewerState(const ViewerState&) = delete;
+  ViewerState& operator=(const ViewerState&) = delete;
+
+  // Documents.
+  /// Reads a scene file and shows it (frame 0, camera fitted unless the view fixes it).
+  void open_scene(const std::string& path);
+  /// Shows `scene` (validated; throws ValueError) labelled `path`; closes any rollout.
+  void set_scene(const Scene& scene, const std::string& path);
+  /// Opens a rollout, trace or scene file by its contents.
+  void open_file(const std::string& path);
+  /// Reads a rollout file and shows it, with the scene it names when that can be read.
+  void open_rollout(const std::string& path);
+  /// Shows `rollout` (validated) labelled `label`; `scene` (may be null) is the scene it started
+  /// from. Any compared rollout is dropped.
+  void set_rollout(const Rollout& rollout, const std::string& label, const Scene* scene);
+  /// Shows `other` as the compared rollout; throws ValueError if it has fewer frames than the
+  /// shown rollout or none is shown.
+  void set_compared_rollout(const Rollout& other, const std::string& label);
+  /// Reads a trace file and drives levels and inspector from it, at its frame.
+  void open_trace(const std::string& path);
+  bool has_scene() const { return doc_ != nullptr; }
+  bool has_rollout() const { return rollout_ != nullptr; }
+  /// The shown scene document; throws ValueError if none is loaded.
+  const SceneDocument& document() const;
+  const SceneDocument* scene_document() const { return doc_.get(); }
+  /// The shown rollout; throws ValueError if none.
+  const RolloutDocument& rollout() const;
+  const RolloutDocument* rollout_document() const { return rollout_.get(); }
+  /// The compared rollout or null.
+  const RolloutDocument* compared_rollout() const { return compare_.get(); }
+  /// Frames of the timeline: the rollout's when one is shown, else the scene's (0 for none).
+  int num_frames() const;
+  /// Seconds per frame of what the timeline shows (0 for nothing).
+  double frame_dt_s() const;
+  /// Observed (ground-truth) frames before the model predicts: the rollout's, else the model's.
+  int observed_frames() const;
+  /// Changes each time a document or the checkpoint is replaced.
+  uint64_t generation() const { return generation_; }
+
+  // Rollout display.
+  void set_rollout_mode(RolloutMode mode);
+  RolloutMode rollout_mode() const { return rollout_mode_; }
+  void set_error_threshold(double threshold) { error_threshold_ = threshold; }
+  double error_threshold() const { return error_threshold_; }
+  /// Moves to the first frame whose mean point error exceeds the threshold; returns it, or -1.
+  int jump_to_error_threshold();
+
+  // Model.
+  bool has_services() const { return services_ != nullptr; }
+  /// Uses `checkpoint` for the level browser and inspector ("" stops). Throws ValueError when
+  /// the state has no ModelServices.
+  void set_checkpoint(const std::string& checkpoint);
+  const std::string& checkpoint() const { return checkpoint_; }
+  /// The model trace the panels show now (at the current frame and level), or null.
+  const ModelTrace* shown_trace() const;
+  /// The trace held (possibly of another frame or level), or null.
+  const ModelTrace* held_trace() const { return trace_.get(); }
+  bool trace_from_file() const { return trace_from_file_; }
+  int trace_level() const { return trace_level_; }
+  /// Level point whose filter weights the held trace carries (-1 none).
+  int trace_picked() const { return trace_picked_; }
+  /// Rolls the checkpoint (and `compare`) out on the scene in the background.
+  void start_rollouts(const std::string& compare);
+  /// What-if: re-runs the checkpoint's rollout on the scene with `edit` applied in the background.
+  void start_what_if(const ObjectEdit& edit);
+  /// Cancels every running job (their results will be dropped).
+  void cancel_jobs();
+  /// True while a rollout or trace runs in the background (cancelled ones not counted).
+  bool busy() const { return rollout_job_ != nullptr || trace_job_ != nullptr; }
+  /// The running rollout job or null (label, progress).
+  const BackgroundJob<std::vector<Rollout>>* rollout_job() const { return rollout_job_.get(); }
+  /// Frame the running trace job captures, or -1.
+  int trace_job_frame() const { return trace_job_ ? trace_request_.frame : -1; }
+  /// Finished jobs whose result was dropped because their ticket was stale or they were cancelled.
+  int dropped_results() const { return dropped_; }
+  /// Cancelled jobs whose thread has not finished yet.
+  size_t retiring_jobs() const { return retired_rollouts_.size() + retired_traces_.size(); }
+  /// The models loaded for jobs, or null without services.
+  const ModelCache* model_cache() const { return cache_.get(); }
+  /// Installs finished jobs of the current generation, drops stale ones and starts the trace the
+  /// view needs. Throws the error of a failed job (once).
+  void update_jobs();
+
+  // View.
+  /// The level data panels and picking read: built from the shown trace, else the scene's
+  /// preview levels; null without a scene.
+  const render::SceneRenderData* active_data() const;
+  /// Rebuilds the scene's level data when the level changed.
+  void ensure_render_data();
+  const render::ViewSpec& view() const { return view_; }
+  /// Layers drawn in the 3D view (same meaning as in a view spec).
+  render::ViewLayers& layers() { return view_.layers; }
+  const render::ViewLayers& layers() const { return view_.layers; }
+  /// Applies `view` (validated; throws ValueError); a fitted camera is resolved against the scene.
+  void set_view(const render::ViewSpec& view);
+  /// Applies a view spec file; throws IoError or FormatError naming the file.
+  void open_view(const std::string& path);
+  /// Writes the current view as JSON; throws IoError naming `path`.
+  void save_view(const std::string& path) const;
+  /// The current view (explicit camera, window size): what save_view writes.
+  render::ViewSpec current_view() const;
+  int current_frame() const { return view_.frame; }
+  /// Moves the timeline to `frame` (clamped); no upload happens.
+  void set_frame(int frame);
+  int selected_point() const { return view_.picked_point; }
+  /// Selects level point `point` (-1 clears any selection); throws ValueError if out of range.
+  void select_point(int point);
+  /// Selects point `point` of the drawn set `set` at the current frame (kLevel: as select_point;
+  /// kNone clears). Throws ValueError for a set not shown or a point outside it.
+  void select(PickSet set, int point);
+  /// The current selection: a rollout point, the selected level point, or empty.
+  Selection selection() const;
+  /// Frame of the model trace the level browser and inspector read for the current frame: with a
+  /// checkpoint, an observed frame the model cannot trace gives the first frame it can.
+  int trace_frame() const;
+  /// Frame the level layers are drawn at: the shown trace's frame, else the current frame.
+  int level_frame() const;
+  /// Sets the U-Net level shown and clears the selection; throws ValueError if out of range.
+  void set_level(int level);
+  /// Number of levels the browser offers (the model's, from its config or the trace).
+  int num_levels() const;
+  /// Points per level and object of the hierarchy shown: the trace's at its frame, else the
+  /// model's hierarchy of the scene at the current frame (computed once per frame and cached).
+  std::vector<LevelCount> level_counts() const;
+  /// How points are drawn ("auto", "spheres", "discs"); throws ValueError for another name.
+  void set_point_style(const std::string& style);
+  /// k of the preview neighbourhood (no trace).
+  void set_neighbors(int k) { view_.neighbors = k; }
+  /// Colour range of the rollout's error colouring.
+  void set_error_range(bool automatic, float lo, float hi);
+  render::Camera& camera() { return view_.camera.camera; }
+  const render::Camera& camera() const { return view_.camera.camera; }
+  /// Fits the camera to what is shown in the free part of the window (preset first when given).
+  void fit_camera(const std::string& preset = "");
+  /// The window the view is laid out in; refits nothing.
+  void set_layout(const WindowLayout& layout) { layout_ = layout; }
+  const WindowLayout& layout() const { return layout_; }
+  Timeline& timeline() { return timeline_; }
+  const Timeline& timeline() const { return timeline_; }
+  /// Advances playback by `dt_s` seconds of display time.
+  void advance_playback(float dt_s);
+  /// Opens `panel`'s section on the next frame.
+  void show_panel(Panel panel) { open_requests_[panel] = true; }
+  /// Takes the sections asked open since the last call.
+  std::map<Panel, bool> take_open_requests() { return std::move(open_requests_); }
+
+ private:
+  void replaced();
+  void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked);
+  void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
+                         std::optional<Scene> what_if_scene);
+  void reap_retired();
+  JobTicket ticket() const { return {generation_, checkpoint_}; }
+
+  ModelServices* services_;
+  std::shared_ptr<ModelCache> cache_;
+  uint64_t generation_ = 1;
+  std::unique_ptr<SceneDocument> doc_;
+  std::unique_ptr<RolloutDocument> rollout_;
+  std::unique_ptr<RolloutDocument> compare_;
+  RolloutMode rollout_mode_ = RolloutMode::kGhost;
+  double error_threshold_ = 0.0;
+  std::string checkpoint_;
+  std::string compare_checkpoint_;
+  std::shared_ptr<const ModelTrace> trace_;
+  bool trace_from_file_ = false;
+  int trace_level_ = -1, trace_picked_ = -1;             ///< What trace_ was captured for.
+  std::unique_ptr<render::SceneRenderData> trace_data_;  ///< Built from trace_ at trace_level_.
+  struct TraceWant {
+    int frame = -1, level = -1, picked = -1;
+    bool operator==(const TraceWant& o) const {
+      return frame == o.frame && level == o.level && picked == o.picked;
+    }
+  };
+  TraceWant trace_request_;  ///< What trace_job_ captures.
+  TraceWant trace_failed_;   ///< Last request that failed (not retried until it changes).
+  /// A finished rollout job's payload: results plus what installing them needs (copied at start).
+  struct RolloutJobInput {
+    std::optional<Scene> scene;          ///< Scene the rollouts ran on.
+    std::optional<Scene> what_if_scene;  ///< Edited scene of a what-if.
+    std::optional<Rollout> original;     ///< What-if: the shown original (not re-run).
+  };
+  RolloutJobInput rollout_input_;
+  std::unique_ptr<BackgroundJob<std::vector<Rollout>>> rollout_job_;
+  std::unique_ptr<BackgroundJob<ModelTrace>> trace_job_;
+  std::vector<std::unique_ptr<BackgroundJob<std::vector<Rollout>>>> retired_rollouts_;
+  std::vector<std::unique_ptr<BackgroundJob<ModelTrace>>> retired_traces_;
+  int dropped_ = 0;
+  Selection drawn_pick_;  ///< A selected rollout point (level points live in view_.picked_point).
+  render::ViewSpec view_;
+  int data_level_ = -1;  ///< Level doc_->data was built for.
+  Timeline timeline_;
+  WindowLayout layout_;
+  std::map<Panel, bool> open_requests_;
+};
+
+/// Width of the side panel (pixels; 0 when the UI is hidden).
+float panel_width(const WindowLayout& layout);
+/// Height of the bottom strip (timeline, plus the error strip with a rollout; 0 when hidden).
+float timeline_height(const WindowLayout& layout, bool has_rollout);
+
+}  // namespace dynscope::app::viewer

@@ -1,0 +1,232 @@
+// Tests of ViewerState's jobs with a fake model: every race between a running job and the user
+// replacing the scene, rollout or checkpoint ends with no crash and no stale result shown;
+// cancellation; one loaded model per checkpoint reused across jobs.
+#include "app/viewer/viewer_state.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "engine/core/error.h"
+#include "engine/io/rollout_file.h"
+#include "engine/io/scene_file.h"
+#include "engine/model/model_config.h"
+#include "engine/rollout/rollout_runner.h"
+#include "fake_model.h"
+#include "viewer_test_util.h"
+
+namespace dynscope::app::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::cv_rollout;
+using testing::FakeModel;
+
+std::string other_scene() {
+  return std::string(DYNSCOPE_SOURCE_DIR) + "/assets/scenes/drop_0000.h5";
+}
+
+// Runs update_jobs (which starts any trace the view needs) until no job runs and every cancelled
+// thread has ended (at most 10 s).
+void settle(ViewerState& s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  s.update_jobs();  // may start the trace the view needs
+  while ((s.busy() || s.retiring_jobs() > 0) && std::chrono::steady_clock::now() < end) {
+    s.update_jobs();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  s.update_jobs();
+}
+
+// A rollout file of the collide scene whose scene file cannot be found.
+std::string orphan_rollout_file() {
+  const fs::path dir = fs::temp_directory_path() / "dynscope_viewer_state_test";
+  fs::create_directories(dir);
+  const Scene scene = read_scene(testing::collide_scene());
+  Rollout r = cv_rollout(scene, (dir / "gone.h5").string());
+  const std::string path = (dir / "orphan_rollout.h5").string();
+  write_rollout(r, path);
+  return path;
+}
+
+TEST(ViewerState, ReplacingTheSceneDropsARunningRollout) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  model.hold();
+  s.start_rollouts("");
+  model.wait_started(1);
+  const uint64_t before = s.generation();
+  s.open_scene(other_scene());
+  EXPECT_GT(s.generation(), before);
+  EXPECT_FALSE(s.busy());  // the job was cancelled and retired at once
+  model.release();
+  settle(s);
+  EXPECT_FALSE(s.has_rollout());  // the collide rollout never lands on the drop scene
+  EXPECT_EQ(s.document().path, other_scene());
+  EXPECT_GE(s.dropped_results(), 1);
+}
+
+TEST(ViewerState, RolloutFileWithoutItsSceneWhileARolloutRuns) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  model.hold();
+  s.start_rollouts("");
+  model.wait_started(1);
+  const std::string orphan = orphan_rollout_file();
+  s.open_rollout(orphan);  // no scene: the scene document goes away
+  EXPECT_FALSE(s.has_scene());
+  model.release();
+  settle(s);
+  ASSERT_TRUE(s.has_rollout());
+  EXPECT_EQ(s.rollout().path, orphan);  // the file's rollout, not the job's
+  EXPECT_GE(s.dropped_results(), 1);
+}
+
+TEST(ViewerState, WhatIfRunningWhenAnotherSceneOpens) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  ObjectEdit edit = object_initial_state(s.document().scene, 2, 2);
+  edit.velocity += Vec3(0.0, 0.5, 0.0);
+  model.hold();
+  s.start_what_if(edit);
+  model.wait_started(1);
+  s.open_scene(other_scene());
+  model.release();
+  settle(s);
+  EXPECT_FALSE(s.has_rollout());
+  EXPECT_EQ(s.compared_rollout(), nullptr);
+  EXPECT_EQ(s.document().path, other_scene());
+  // The what-if of a rollout that is replaced by a rollout file: the file stays shown.
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  model.hold();
+  s.start_what_if(edit);
+  model.wait_started(2);
+  s.open_rollout(orphan_rollout_file());
+  model.release();
+  settle(s);
+  ASSERT_TRUE(s.has_rollout());
+  EXPECT_EQ(s.compared_rollout(), nullptr);
+  EXPECT_EQ(s.rollout().path, orphan_rollout_file());
+}
+
+TEST(ViewerState, OldCheckpointsTraceIsNeverInstalled) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  s.set_frame(12);
+  model.hold();
+  s.update_jobs();  // starts the trace of a.pt at frame 12
+  model.wait_traces_started(1);
+  ASSERT_TRUE(s.busy());
+  s.set_checkpoint("b.pt");
+  model.release();
+  settle(s);
+  ASSERT_NE(s.shown_trace(), nullptr);  // b.pt's trace, captured after the change
+  EXPECT_EQ(s.shown_trace()->checkpoint_path, "b.pt");
+  EXPECT_EQ(s.shown_trace()->frame, 12);
+  EXPECT_GE(s.dropped_results(), 1);
+}
+
+TEST(ViewerState, TraceOfTheOldSceneIsDropped) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  s.set_frame(12);
+  model.hold();
+  s.update_jobs();
+  model.wait_traces_started(1);
+  s.open_scene(other_scene());  // frame 0: the model's first traceable frame (2) is wanted
+  model.release();
+  settle(s);
+  // The old scene's trace was dropped; what is held is the new scene's, captured after the swap.
+  ASSERT_NE(s.held_trace(), nullptr);
+  EXPECT_EQ(s.held_trace()->scene_path, other_scene());
+  EXPECT_EQ(s.held_trace()->frame, 2);
+  EXPECT_EQ(s.dropped_results(), 1);
+}
+
+TEST(ViewerState, CancelStopsTheModelAndDropsTheResult) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  model.hold();
+  s.start_rollouts("b.pt");
+  model.wait_started(1);
+  s.cancel_jobs();
+  EXPECT_FALSE(s.busy());
+  settle(s);  // still held: only the cancel flag can end the job
+  EXPECT_EQ(s.retiring_jobs(), 0u);
+  EXPECT_EQ(model.cancelled_calls(), 1);
+  EXPECT_FALSE(s.has_rollout());
+  EXPECT_EQ(s.dropped_results(), 1);
+  model.release();
+  // A job can start again afterwards.
+  s.start_rollouts("");
+  settle(s);
+  EXPECT_TRUE(s.has_rollout());
+}
+
+TEST(ViewerState, OneLoadedModelPerCheckpointAcrossJobs) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  s.start_rollouts("b.pt");
+  settle(s);
+  ASSERT_TRUE(s.has_rollout());
+  EXPECT_EQ(model.loads(), 2);
+  // Traces at two frames and a what-if with a.pt: no further load.
+  s.set_rollout_mode(RolloutMode::kGhost);
+  s.open_scene(testing::collide_scene());
+  for (int f : {5, 9}) {
+    s.set_frame(f);
+    settle(s);
+    ASSERT_NE(s.shown_trace(), nullptr) << f;
+  }
+  ObjectEdit edit = object_initial_state(s.document().scene, 2, 2);
+  s.start_what_if(edit);
+  settle(s);
+  EXPECT_TRUE(s.has_rollout());
+  EXPECT_EQ(model.loads(), 2);
+  EXPECT_EQ(s.model_cache()->loads(), 2);
+  // Changing the checkpoint keeps only the models in use.
+  s.set_checkpoint("c.pt");
+  s.start_rollouts("");
+  settle(s);
+  EXPECT_EQ(model.loads(), 3);
+  EXPECT_LE(s.model_cache()->size(), 2u);
+}
+
+// Level count and observed frames are the engine's (the model config, the rollout defaults), not
+// the viewer's own numbers.
+TEST(ViewerState, LevelsAndObservedFramesComeFromTheEngine) {
+  ViewerState s;
+  EXPECT_EQ(s.num_levels(), ModelConfig{}.levels);
+  EXPECT_EQ(s.observed_frames(), RolloutOptions{}.observed_frames);
+  s.open_scene(testing::collide_scene());
+  const int levels = ModelConfig::preset(hierarchy_preset(s.document().scene)).levels;
+  EXPECT_EQ(s.num_levels(), levels);
+  s.set_level(levels - 1);
+  EXPECT_THROW(s.set_level(levels), ValueError);
+  EXPECT_EQ(s.level_counts().size(), static_cast<size_t>(levels));
+  // The rollout's own count wins once one is shown.
+  Rollout r = cv_rollout(s.document().scene, testing::collide_scene());
+  r.observed_frames = 5;
+  s.set_rollout(r, "r", &s.document().scene);
+  EXPECT_EQ(s.observed_frames(), 5);
+}
+
+}  // namespace
+}  // namespace dynscope::app::viewer
