@@ -21,6 +21,7 @@
 #include <tuple>
 
 #include "engine/core/rng.h"
+#include "engine/core/system_info.h"
 #include "engine/core/threads.h"
 #include "engine/geometry/grid_downsample.h"
 #include "engine/geometry/neighbors.h"
@@ -321,8 +322,10 @@ BENCHMARK(BM_BaselineMapGridDownsamplePerObject)->Apply(serial_args);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  benchmark::AddCustomContext("compute_threads_default",
-                              std::to_string(dynscope::default_compute_threads()));
+  // Torch-free, so the machine context without the LibTorch lines of bench_context.cpp.
+  for (const auto& [key, value] : dynscope::system_context()) {
+    benchmark::AddCustomContext(key, value);
+  }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;
