@@ -5,6 +5,7 @@
 #include <torch/utils.h>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
 #include "engine/model/checkpoint.h"
 
 namespace dynscope {
@@ -33,7 +34,12 @@ LoadedModel load_model(const std::string& checkpoint_path) {
 }
 
 void set_torch_threads(int threads) {
-  if (threads < 0) throw ValueError("threads", "must be >= 0, got " + std::to_string(threads));
+  // Far more threads than cores never finishes on a busy machine; a count above the compute
+  // budget's bound is a typing error.
+  if (threads < 0 || threads > kMaxComputeThreads) {
+    throw ValueError("threads", "must be in [0, " + std::to_string(kMaxComputeThreads) +
+                                    "] (0: LibTorch's default), got " + std::to_string(threads));
+  }
   if (threads > 0) torch::set_num_threads(threads);
 }
 

@@ -23,7 +23,7 @@ struct LoadedModel {
 LoadedModel load_model(const std::string& checkpoint_path);
 
 /// Sets LibTorch's intra-op thread count (`threads` >= 1; 0 leaves the default). Throws
-/// ValueError for a negative count.
+/// ValueError for a count outside [0, kMaxComputeThreads].
 void set_torch_threads(int threads);
 
 }  // namespace dynscope
