@@ -45,10 +45,11 @@ void check_numbers(const nlohmann::json& given, const nlohmann::json& reference,
     if (!ref.is_number_integer()) continue;
     const double hi = max_integer_field(it.key());
     if (v != std::floor(v) || v < 0 || v > hi) {
-      char range[64];
-      std::snprintf(range, sizeof range, "[0, %.0f]", hi);
+      const std::string max = it.key() == "seed" ? "18446744073709551615"
+                              : hi > 3e9         ? "9223372036854775807"
+                                                 : "2147483647";
       throw FormatError(source, field,
-                        std::string("must be an integer in ") + range + ", got " + value.dump());
+                        "must be an integer in [0, " + max + "], got " + value.dump());
     }
   }
 }

@@ -48,6 +48,7 @@ TEST(TrainOptions, IntegerFieldsRefuseFractionsSignsAndOverflow) {
   expect_has(parse_error(R"({"batch": 4294967297})"), "batch: must be an integer");
   expect_has(parse_error(R"({"datasets": [{"out": "d", "scenario": "drop", "count": 1.5}]})"),
              "datasets[0].count");
+  expect_has(parse_error(R"({"model_config": {"width": 0}})"), "width: must be >= 1");
   // Integral values written as floats are fine, and so are float fields.
   EXPECT_EQ(parse_error(R"({"model_config": {"levels": 3.0}, "lr": 0.001, "max_steps": 5})"), "");
   EXPECT_EQ(TrainOptions::from_json(R"({"model_config": {"levels": 3.0}})", "r").model.levels, 3);
@@ -64,7 +65,6 @@ TEST(TrainOptions, ResolveRefusesValuesOutsideTheirRange) {
              "epochs: must be a finite number in [1, 1e+06]");
   expect_has(resolve_error(R"({"sampling": {"voxel": -0.3}})"), "sampling.voxel");
   expect_has(resolve_error(R"({"model_config": {"k": 100000}})"), "model_config.k");
-  expect_has(resolve_error(R"({"model_config": {"width": 0}})"), "width");
 }
 
 }  // namespace
