@@ -1,16 +1,18 @@
 // Helpers shared by the subcommands.
 #include "app/cli_util.h"
 
-#include "engine/model/checkpoint_info.h"
-#include "engine/rollout/model_predictor.h"
-#include "engine/rollout/trace_capture.h"
-#include "engine/train/train_options.h"
-
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
+#include "engine/model/checkpoint_info.h"
+#include "engine/rollout/model_predictor.h"
+#include "engine/rollout/trace_capture.h"
+#include "engine/train/train_options.h"
 
 namespace dynscope::app {
 
@@ -29,6 +31,94 @@ void require_readable_file(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) throw IoError(path, "not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot be opened for reading");
+}
+
+namespace {
+
+std::string number_text(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+void require_in_range(const std::string& name, double v, double lo, double hi, bool lo_open,
+                      const std::string& note) {
+  const bool ok = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
+  if (ok) return;
+  throw ValueError(name, std::string("must be a finite number in ") + (lo_open ? "(" : "[") +
+                             number_text(lo) + ", " + number_text(hi) + "]" +
+                             (note.empty() ? "" : " " + note) + ", got " + number_text(v));
+}
+
+void require_int_in_range(const std::string& name, int64_t v, int64_t lo, int64_t hi,
+                          const std::string& note) {
+  if (v >= lo && v <= hi) return;
+  throw ValueError(name, "must be an integer in [" + std::to_string(lo) + ", " +
+                             std::to_string(hi) + "]" + (note.empty() ? "" : " " + note) +
+                             ", got " + std::to_string(v));
+}
+
+void require_image_size(const std::string& option, int width, int height) {
+  const int64_t pixels = int64_t{width} * height;
+  if (width >= 1 && height >= 1 && pixels <= kMaxImagePixels) return;
+  throw ValueError(option, "must be at least 1x1 and at most " + std::to_string(kMaxImagePixels) +
+                               " pixels (e.g. 4096x4096), got " + std::to_string(width) + "x" +
+                               std::to_string(height));
+}
+
+CLI::Validator unsigned_integer() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        const bool digits = !value.empty() && value.size() <= 20 &&
+                            value.find_first_not_of("0123456789") == std::string::npos;
+        if (digits && (value.size() < 20 || value <= "18446744073709551615")) return "";
+        return "must be an integer in [0, 18446744073709551615], got " + value;
+      },
+      "UINT64");
+}
+
+CLI::Validator finite_number(double lo, double hi, bool lo_open) {
+  return CLI::Validator(
+      [lo, hi, lo_open](std::string& value) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(value.c_str(), &end);
+        const bool parsed = !value.empty() && end == value.c_str() + value.size();
+        if (parsed && std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi) return "";
+        return std::string("must be a finite number in ") + (lo_open ? "(" : "[") +
+               number_text(lo) + ", " + number_text(hi) + "], got " + value;
+      },
+      "NUMBER");
+}
+
+int64_t max_threads_option() { return kMaxComputeThreads; }
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) {
+    const bool same = fs::equivalent(a, b, ec);
+    if (!ec) return same;
+  }
+  auto normal = [](const std::string& p) {
+    std::error_code e;
+    const fs::path absolute = fs::absolute(p, e).lexically_normal();
+    const fs::path canonical = fs::weakly_canonical(absolute, e);
+    return e ? absolute : canonical;
+  };
+  return normal(a) == normal(b);
+}
+
+void require_distinct_output(const std::string& option, const std::string& output,
+                             const std::vector<NamedPath>& inputs) {
+  if (output.empty()) return;
+  for (const auto& [input_option, input] : inputs) {
+    if (input.empty() || !same_file(output, input)) continue;
+    throw ValueError(option,
+                     "'" + output + "' is the " + input_option +
+                         " file; writing it would destroy that input (choose another path)");
+  }
 }
 
 DatasetSummary generate_with_progress(const DatasetOptions& options) {

@@ -1,10 +1,13 @@
 // Small helpers shared by the subcommands (formatting, file checks).
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
-#include "engine/core/types.h"
 #include "engine/core/progress.h"
+#include "engine/core/types.h"
 #include "engine/io/trace_file.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/scene/rollout.h"
@@ -17,6 +20,51 @@ namespace dynscope::app {
 std::string format_aabb(const Aabb& box);
 /// Throws IoError if `path` does not exist or is not a regular readable file.
 void require_readable_file(const std::string& path);
+
+/// Throws ValueError(`name`, "must be in [lo, hi] ..., got v") unless `v` is a finite number in
+/// [lo, hi]; with `lo_open` the lower end is excluded ("(lo, hi]"). `note` is appended to the
+/// range, e.g. "(0: all frames)".
+void require_in_range(const std::string& name, double v, double lo, double hi, bool lo_open = false,
+                      const std::string& note = "");
+/// Throws ValueError(`name`, "must be an integer in [lo, hi] ..., got v") unless lo <= v <= hi.
+void require_int_in_range(const std::string& name, int64_t v, int64_t lo, int64_t hi,
+                          const std::string& note = "");
+
+/// Largest frame count or frame index an option accepts (a larger one is a typing error).
+constexpr int64_t kMaxFrameOption = 1000000;
+/// Largest voxel edge an option accepts, in scene units.
+constexpr double kMaxVoxelOption = 1e6;
+
+/// Largest image a command renders, in pixels (4096 x 4096): a bigger framebuffer, multisampled,
+/// needs gigabytes.
+constexpr int64_t kMaxImagePixels = int64_t{4096} * 4096;
+
+/// Throws ValueError(`option`, ...) if `width` x `height` exceeds kMaxImagePixels.
+void require_image_size(const std::string& option, int width, int height);
+
+/// CLI11 check for an unsigned option (seeds): CLI11 turns "-1" into 2^64 - 1, so a sign or
+/// anything but decimal digits is refused with the accepted range.
+CLI::Validator unsigned_integer();
+
+/// CLI11 check: a finite number in (lo, hi] (`lo_open`) or [lo, hi]; NaN and inf are refused
+/// (CLI11's own PositiveNumber lets NaN through). The message states the range.
+CLI::Validator finite_number(double lo, double hi, bool lo_open);
+
+/// Largest --threads a command accepts (the compute-thread budget's bound).
+int64_t max_threads_option();
+
+/// An input of a command: the option that named it ("--scene", "input") and its path.
+using NamedPath = std::pair<std::string, std::string>;
+
+/// True if `a` and `b` name the same file: the same inode when both exist (hard links and
+/// symbolic links included), else the same normalised absolute path.
+bool same_file(const std::string& a, const std::string& b);
+
+/// Throws ValueError(`option`, ...) naming the input if writing `output` would replace one of
+/// `inputs` (same_file); empty paths are ignored. Called before any work, so a command never
+/// destroys what it reads.
+void require_distinct_output(const std::string& option, const std::string& output,
+                             const std::vector<NamedPath>& inputs);
 
 /// Checks `options` (before the first scene; the output directory is created), then generates
 /// the dataset with a progress bar. Throws what check_dataset_options / generate_dataset throw.

@@ -1,14 +1,15 @@
 // `dynscope eval`: point error and contact accuracy of a checkpoint over a dataset split.
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
 #include "engine/core/error.h"
 #include "engine/core/progress.h"
+#include "engine/io/temp_file.h"
 #include "engine/rollout/evaluation.h"
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
@@ -26,15 +27,28 @@ struct EvalArgs {
   double threshold = 0.0;
   double threshold_fraction = kContactThresholdFraction;
   double voxel = 0.0;
+  bool voxel_given = false;
+  bool threshold_given = false;
   bool no_baseline = false;
   int threads = 0;
 };
 
 void run_eval(const EvalArgs& args) {
+  require_int_in_range("--observed", args.observed, 3, kMaxFrameOption);
+  if (args.voxel_given) require_in_range("--voxel", args.voxel, 0, kMaxVoxelOption, true);
+  if (args.threshold_given)
+    require_in_range("--threshold", args.threshold, 0, kMaxVoxelOption, true);
+  require_in_range("--threshold-fraction", args.threshold_fraction, 0, 1e6, true);
+  require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);
   const DatasetSplit split = read_dataset_split(args.data, args.split);
   if (split.items.empty())
     throw ValueError("split", args.data + " has no " + args.split + " scenes");
+  std::vector<NamedPath> inputs = {{"--checkpoint", args.checkpoint},
+                                   {"checkpoint recipe", recipe_path(args.checkpoint)},
+                                   {"dataset manifest", args.data + "/manifest.json"}};
+  for (const DatasetItem& item : split.items) inputs.push_back({"dataset scene", item.path});
+  require_distinct_output("--json", args.json, inputs);
   set_torch_threads(args.threads);
   const LoadedModel model = load_model(args.checkpoint);
   EvalOptions options;
@@ -48,11 +62,7 @@ void run_eval(const EvalArgs& args) {
   const EvalSummary summary = evaluate_split(split, model.predict, options, &progress);
   progress.finish();
   std::fputs(eval_table(summary).c_str(), stdout);
-  if (!args.json.empty()) {
-    std::ofstream out(args.json, std::ios::trunc);
-    out << eval_to_json(summary);
-    if (!out) throw IoError(args.json, "cannot write");
-  }
+  if (!args.json.empty()) write_text_file_atomically(args.json, eval_to_json(summary));
 }
 
 }  // namespace
@@ -75,11 +85,13 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--observed", args->observed, "Ground-truth frames before prediction (>= 3)")
       ->capture_default_str();
   cmd->add_option("--threshold", args->threshold,
-                  "Contact distance in scene units (default: --threshold-fraction x voxel)");
+                  "Contact distance in scene units (default: --threshold-fraction x voxel)")
+      ->each([args](const std::string&) { args->threshold_given = true; });
   cmd->add_option("--threshold-fraction", args->threshold_fraction,
                   "Contact threshold as a fraction of the sampling voxel")
       ->capture_default_str();
-  cmd->add_option("--voxel", args->voxel, "Point sampling voxel (default: the checkpoint's)");
+  cmd->add_option("--voxel", args->voxel, "Point sampling voxel (default: the checkpoint's)")
+      ->each([args](const std::string&) { args->voxel_given = true; });
   cmd->add_flag("--no-baseline", args->no_baseline, "Skip the constant-velocity baseline");
   cmd->add_option("--threads", args->threads, "LibTorch threads (0: default)")
       ->capture_default_str();

@@ -51,6 +51,7 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--scenario", args->scenario, "Scenario name (listed below)")->required();
   cmd->add_option("--count", args->count, "Number of scenes to generate (>= 1)")->required();
   cmd->add_option("--seed", args->seed, "Base seed; scene i is seeded with derive_seed(seed, i)")
+      ->check(unsigned_integer())
       ->capture_default_str();
   cmd->add_option("--out", args->out_dir,
                   "Output directory (created if missing; files are replaced)")

@@ -322,12 +322,14 @@ void add_info_command(CLI::App& app) {
   cmd->add_option("--voxel", opt->voxel,
                   "Grid downsampling voxel edge for the point counts (default: 0.2 for movi-* "
                   "scenes, 0.05 for other scenes, bounding-box diagonal / 50 for meshes)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number(0, kMaxVoxelOption, true));
   cmd->add_option("--oversample", opt->oversample,
                   "Surface samples per voxel-face area before downsampling")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_number(0, 1e4, true))
       ->capture_default_str();
-  cmd->add_option("--seed", opt->seed, "Surface sampling seed")->capture_default_str();
+  cmd->add_option("--seed", opt->seed, "Surface sampling seed")
+      ->check(unsigned_integer())
+      ->capture_default_str();
   cmd->add_flag("--json", opt->json, "Print machine-readable JSON instead of a table");
   cmd->add_flag("--system", opt->system,
                 "Describe this machine and process instead: LibTorch version and CUDA, the BLAS "

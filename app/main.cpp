@@ -16,6 +16,10 @@ int main(int argc, char** argv) {
       "Generate ground truth, train and roll out models, and inspect scenes, rollouts and\n"
       "model internals. Run `dynscope SUBCOMMAND --help` for details."};
   app.require_subcommand(1);
+  // Every error is one line, like the errors of the commands themselves.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("dynscope: error: ") + e.what() + " (see --help)\n";
+  });
   app.set_version_flag("--version", "dynscope 0.1.0");
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "debug, info, warn, error or quiet")

@@ -1,9 +1,13 @@
 // `dynscope render SCENE.h5|ROLLOUT.h5 --out DIR [--view] [--frames] [--size]` (headless).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
@@ -11,11 +15,74 @@
 #include "engine/core/log.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/temp_file.h"
 #include "engine/io/trace_file.h"
 #include "render/batch_render.h"
 #include "render/context_factory.h"
 
 namespace dynscope::app {
+namespace {
+
+// Largest multisampling count accepted (GL implementations offer at most a few dozen).
+constexpr int kMaxSamples = 64;
+// Deepest U-Net level a model can have (ModelConfig allows 1..8 levels).
+constexpr int kMaxLevel = 7;
+
+// True if `name` is one of the files render writes into its output directory.
+bool is_render_output_name(const std::string& name) {
+  if (name == "contact_sheet.png" || name == "render.mp4" || name == "view.json" ||
+      name == "trace.h5") {
+    return true;
+  }
+  const std::string prefix = "frame_", suffix = ".png";
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix)) {
+    return false;
+  }
+  const std::string digits =
+      name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  return std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+// Refuses an --out that is an input, or that holds an input under the name of an output.
+void require_outputs_distinct(const render::BatchRenderOptions& o, const std::string& checkpoint) {
+  namespace fs = std::filesystem;
+  const std::vector<NamedPath> inputs = {{"input", o.scene_path},
+                                         {"--view", o.view_path},
+                                         {"--trace", o.trace_path},
+                                         {"--checkpoint", checkpoint}};
+  require_distinct_output("--out", o.out_dir, inputs);
+  for (const auto& [option, path] : inputs) {
+    if (path.empty()) continue;
+    const fs::path p(path);
+    if (is_render_output_name(p.filename().string()) &&
+        same_file(p.parent_path().empty() ? "." : p.parent_path().string(), o.out_dir)) {
+      throw ValueError("--out", "the " + option + " file '" + path +
+                                    "' is in the output directory under the name of an output; "
+                                    "rendering would overwrite it (choose another --out)");
+    }
+  }
+}
+
+// Refuses a --level or --pick the trace does not have (the model's hierarchy decides).
+void require_trace_selection(const ModelTrace& trace, const render::BatchRenderOptions& o,
+                             const std::string& source) {
+  const int levels = static_cast<int>(trace.levels.size());
+  if (o.level >= levels) {
+    throw ValueError("--level", "must be in [0, " + std::to_string(levels - 1) + "] (the levels " +
+                                    "of " + source + "), got " + std::to_string(o.level));
+  }
+  if (o.picked_point < 0) return;
+  const int level = std::max(o.level, 0);
+  const auto points = static_cast<int64_t>(trace.levels[static_cast<size_t>(level)].points.rows());
+  if (o.picked_point >= points) {
+    throw ValueError("--pick", "must be in [0, " + std::to_string(points - 1) + "] (the points " +
+                                   "of level " + std::to_string(level) + " in " + source +
+                                   "), got " + std::to_string(o.picked_point));
+  }
+}
+
+}  // namespace
 
 void add_render_command(CLI::App& app) {
   auto options = std::make_shared<render::BatchRenderOptions>();
@@ -42,9 +109,15 @@ void add_render_command(CLI::App& app) {
                   "Model trace of the scene (`dynscope trace`): draw the model's levels and lists");
   cmd->add_option("--checkpoint", *checkpoint,
                   "Trace this checkpoint at the frame (--frames N, default 2) and draw like --trace");
-  cmd->add_option("--level", options->level, "Show this U-Net level's points (0 = input points)");
+  auto given = std::make_shared<std::vector<std::string>>();
+  auto mark = [given](const char* name) {
+    return [given, name](const std::string&) { given->push_back(name); };
+  };
+  cmd->add_option("--level", options->level, "Show this U-Net level's points (0 = input points)")
+      ->each(mark("--level"));
   cmd->add_option("--pick", options->picked_point,
-                  "Show the neighbourhoods of this point of the level (its index there)");
+                  "Show the neighbourhoods of this point of the level (its index there)")
+      ->each(mark("--pick"));
   cmd->add_option("--size", *size, "Image size WxH, overriding the view (e.g. 1280x720)");
   cmd->add_option("--out", options->out_dir, "Output directory")->required();
   cmd->add_option("--context", *backend, "GL context: osmesa (headless) or glfw (hidden window)")
@@ -53,12 +126,32 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag(
       "--no-video", [options](int64_t) { options->video = false; }, "Skip the MP4");
-  cmd->callback([options, size, backend, checkpoint] {
+  cmd->callback([options, size, backend, checkpoint, given] {
+    auto was_given = [&](const char* name) {
+      return std::find(given->begin(), given->end(), name) != given->end();
+    };
+    if (was_given("--level")) require_int_in_range("--level", options->level, 0, kMaxLevel);
+    if (was_given("--pick")) {
+      require_int_in_range("--pick", options->picked_point, 0, std::numeric_limits<int32_t>::max());
+    }
+    require_int_in_range("--samples", options->samples, 0, kMaxSamples, "(0: no multisampling)");
+    require_outputs_distinct(*options, *checkpoint);
+    if (!options->trace_path.empty()) {
+      require_readable_file(options->trace_path);
+      require_readable_file(options->scene_path);
+      const ModelTrace trace = read_trace(options->trace_path);
+      require_trace_selection(trace, *options, options->trace_path);
+      if (!is_rollout_file(options->scene_path)) {
+        check_trace_matches_scene(trace, read_scene(options->scene_path), options->trace_path);
+      }
+    }
     if (!size->empty()) {
       const auto [w, h] = render::parse_image_size(*size);
+      require_image_size("--size", w, h);
       options->width = w;
       options->height = h;
     }
+    std::unique_ptr<TempFile> trace_file;
     if (!checkpoint->empty()) {
       if (!options->trace_path.empty()) {
         throw ValueError("--checkpoint", "give --checkpoint or --trace, not both");
@@ -80,13 +173,22 @@ void add_render_command(CLI::App& app) {
       const ModelTrace trace =
           capture_checkpoint_trace(*checkpoint, scene, options->scene_path, frame,
                                    std::max(options->level, 0), options->picked_point);
+      require_trace_selection(trace, *options, *checkpoint);
       std::filesystem::create_directories(options->out_dir);
-      options->trace_path = (std::filesystem::path(options->out_dir) / "trace.h5").string();
+      // Rendered from a temporary file that replaces DIR/trace.h5 only once rendering succeeded.
+      trace_file = std::make_unique<TempFile>(
+          (std::filesystem::path(options->out_dir) / "trace.h5").string());
+      options->trace_path = trace_file->path();
       write_trace(trace, options->trace_path);
-      log_info("traced ", *checkpoint, " at frame ", frame, ": ", options->trace_path);
+      log_info("traced ", *checkpoint, " at frame ", frame);
     }
     auto context = render::create_context(*backend, 64, 64);
     const render::BatchRenderResult result = render::render_file(*context, *options);
+    if (trace_file) {
+      trace_file->commit();
+      std::printf("trace: %s\n",
+                  (std::filesystem::path(options->out_dir) / "trace.h5").string().c_str());
+    }
     for (const std::string& note : result.notes) log_info(note);
     std::printf("wrote %zu frames to %s\n", result.frame_files.size(), options->out_dir.c_str());
     if (!result.contact_sheet.empty())

@@ -13,6 +13,7 @@
 #include "engine/rollout/metrics.h"
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
+#include "engine/train/train_options.h"
 
 namespace dynscope::app {
 namespace {
@@ -24,12 +25,21 @@ struct RolloutArgs {
   int observed = 3;
   int frames = 0;
   double voxel = 0.0;
+  bool voxel_given = false;
   int threads = 0;
 };
 
 void run_rollout_command(const RolloutArgs& args) {
+  require_int_in_range("--observed", args.observed, 3, kMaxFrameOption);
+  require_int_in_range("--frames", args.frames, 0, kMaxFrameOption, "(0: all frames)");
+  if (args.voxel_given) require_in_range("--voxel", args.voxel, 0, kMaxVoxelOption, true);
+  require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);  // before the progress bar starts
   require_readable_file(args.scene);
+  require_distinct_output("--out", args.out,
+                          {{"--scene", args.scene},
+                           {"--checkpoint", args.checkpoint},
+                           {"checkpoint recipe", recipe_path(args.checkpoint)}});
   set_torch_threads(args.threads);
   const Scene scene = read_scene(args.scene);
   RolloutOptions options;
@@ -41,8 +51,10 @@ void run_rollout_command(const RolloutArgs& args) {
   const Rollout r =
       rollout_checkpoint(args.checkpoint, scene, args.scene, options, args.voxel, &progress, &points);
   progress.finish();
-  write_rollout(r, args.out);
+  // Everything that can fail runs before the file is written: a failed command leaves --out as
+  // it was.
   const Rollout baseline = run_baseline_rollout(scene, points, options);
+  write_rollout(r, args.out);
   std::printf("wrote %s: %d frames (%d observed), %lld points\n", args.out.c_str(),
               r.num_frames(), r.observed_frames, static_cast<long long>(r.num_points()));
   std::printf("end point error %.4f (mean distance to truth at frame %d, scene units); "
@@ -82,7 +94,8 @@ void add_rollout_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--voxel", args->voxel,
                   "Point sampling voxel (default: the checkpoint's recipe, else 0.2 for movi-*, "
-                  "0.05 otherwise)");
+                  "0.05 otherwise)")
+      ->each([args](const std::string&) { args->voxel_given = true; });
   cmd->add_option("--threads", args->threads, "LibTorch threads (0: default)")
       ->capture_default_str();
   cmd->callback([args] { run_rollout_command(*args); });

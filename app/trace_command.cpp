@@ -23,6 +23,7 @@ struct TraceArgs {
   int frame = 2;
   std::string query;
   double voxel = 0.0;
+  bool voxel_given = false;
 };
 
 std::vector<int> parse_queries(const std::string& text) {
@@ -34,18 +35,24 @@ std::vector<int> parse_queries(const std::string& text) {
     try {
       size_t used = 0;
       const int v = std::stoi(item, &used);
-      if (used != item.size()) throw std::invalid_argument(item);
+      if (used != item.size() || v < 0) throw std::invalid_argument(item);
       out.push_back(v);
     } catch (const std::exception&) {
-      throw ValueError("query", "'" + item + "' is not a point index");
+      throw ValueError("--query", "'" + item + "' is not a point index (an integer >= 0)");
     }
   }
   return out;
 }
 
 void run_trace(const TraceArgs& args) {
+  require_int_in_range("--frame", args.frame, 2, kMaxFrameOption);
+  if (args.voxel_given) require_in_range("--voxel", args.voxel, 0, kMaxVoxelOption, true);
   require_readable_file(args.checkpoint);
   require_readable_file(args.scene);
+  require_distinct_output("--out", args.out,
+                          {{"--scene", args.scene},
+                           {"--checkpoint", args.checkpoint},
+                           {"checkpoint recipe", recipe_path(args.checkpoint)}});
   const std::vector<int> queries = parse_queries(args.query);
   const CheckpointInfo info = read_checkpoint_info(args.checkpoint);
   const Scene scene = read_scene(args.scene);
@@ -80,7 +87,8 @@ void add_trace_command(CLI::App& app) {
   cmd->add_option("--frame", args->frame, "Frame t the model reads (>= 2)")->capture_default_str();
   cmd->add_option("--out", args->out, "Trace file to write (HDF5)")->required();
   cmd->add_option("--query", args->query, "Comma-separated level-0 point indices, e.g. 0,17,42");
-  cmd->add_option("--voxel", args->voxel, "Point sampling voxel (default: the checkpoint's)");
+  cmd->add_option("--voxel", args->voxel, "Point sampling voxel (default: the checkpoint's)")
+      ->each([args](const std::string&) { args->voxel_given = true; });
   cmd->callback([args] { run_trace(*args); });
 }
 

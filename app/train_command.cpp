@@ -162,7 +162,8 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--log", a->log, "CSV log, one row per step");
   cmd->add_option("--checkpoint-every", a->checkpoint_every, "Save every N steps (default 200)");
   cmd->add_option("--max-steps", a->max_steps, "Stop after N steps in total (0: all epochs)");
-  cmd->add_option("--seed", a->seed, "Seed of initialisation, sampling and noise");
+  cmd->add_option("--seed", a->seed, "Seed of initialisation, sampling and noise")
+      ->check(unsigned_integer());
   cmd->add_option("--width", a->width, "Base channel width C (default 32)");
   cmd->add_option("--levels", a->levels, "Hierarchy levels (default 4)");
   cmd->add_option("--bottleneck-blocks", a->bottleneck, "Blocks at the coarsest level (default 3)");

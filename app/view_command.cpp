@@ -16,6 +16,7 @@
 #include "app/viewer/platform.h"
 #include "app/viewer/viewer_app.h"
 #include "engine/core/error.h"
+#include "engine/io/temp_file.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
@@ -25,6 +26,9 @@
 
 namespace dynscope::app {
 namespace {
+
+// Most frames drawn before a screenshot (each takes a fraction of a second headless).
+constexpr int kMaxWarmupFrames = 10000;
 
 struct ViewOptions {
   std::string scene_path;
@@ -110,9 +114,13 @@ void run_headless(const ViewOptions& o, int width, int height) {
     app.frame();
     if (app.state().busy()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  app.request_screenshot(o.screenshot);
+  // The picture goes to a temporary file that replaces --screenshot only when the viewer had no
+  // error: a failed run leaves an existing PNG as it was.
+  TempFile screenshot(o.screenshot);
+  app.request_screenshot(screenshot.path());
   app.frame();
   if (!app.last_error().empty()) throw Error("view: " + app.last_error());
+  screenshot.commit();
   std::printf("wrote %s (%dx%d)\n", o.screenshot.c_str(), width, height);
 }
 
@@ -165,7 +173,14 @@ void add_view_command(CLI::App& app) {
   cmd->callback([o] {
     int width = 1280, height = 800;
     if (!o->size.empty()) std::tie(width, height) = render::parse_image_size(o->size);
-    if (o->warmup_frames < 0) throw ValueError("--warmup", "must be >= 0");
+    require_image_size("--size", width, height);
+    require_int_in_range("--warmup", o->warmup_frames, 0, kMaxWarmupFrames);
+    require_distinct_output("--screenshot", o->screenshot,
+                            {{"file", o->scene_path},
+                             {"--checkpoint", o->checkpoint},
+                             {"--compare", o->compare},
+                             {"--trace", o->trace_path},
+                             {"--view", o->view_path}});
     if (!o->screenshot.empty()) {
       run_headless(*o, width, height);
     } else {

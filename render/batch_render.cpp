@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -16,6 +17,7 @@
 #include "engine/core/progress.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/temp_file.h"
 #include "engine/io/trace_file.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -125,6 +127,7 @@ BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& op
   const int thumb_factor = std::max(1, (view.width + 239) / 240);
 
   BatchRenderResult result;
+  std::vector<std::unique_ptr<TempFile>> pending;
   std::vector<Image> thumbnails;
   std::vector<std::string> captions;
   Progress progress("render", last - first + 1,
@@ -144,7 +147,10 @@ BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& op
     char name[32];
     std::snprintf(name, sizeof(name), "frame_%04d.png", f);
     const std::string path = (fs::path(options.out_dir) / name).string();
-    write_png(path, image);
+    // Every output waits in a temporary file until the last one is written: a failure on the
+    // way leaves the files of an earlier run untouched.
+    pending.push_back(std::make_unique<TempFile>(path));
+    write_png(pending.back()->path(), image);
     result.frame_files.push_back(path);
     progress.advance();
   }
@@ -152,14 +158,17 @@ BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& op
 
   if (options.contact_sheet && !thumbnails.empty()) {
     result.contact_sheet = (fs::path(options.out_dir) / "contact_sheet.png").string();
-    write_png(result.contact_sheet, make_contact_sheet(thumbnails, captions));
+    pending.push_back(std::make_unique<TempFile>(result.contact_sheet));
+    write_png(pending.back()->path(), make_contact_sheet(thumbnails, captions));
   }
   // The resolved view (camera fixed) reopens the same picture in the viewer.
   view.frame = first;
   view.camera.fit = false;
   view.camera.preset.clear();
   result.view_file = (fs::path(options.out_dir) / "view.json").string();
-  save_view_spec(view, result.view_file);
+  pending.push_back(std::make_unique<TempFile>(result.view_file));
+  save_view_spec(view, pending.back()->path());
+  for (const auto& temp : pending) temp->commit();
 
   if (options.video && last > first) {
     const std::string ffmpeg = find_on_path("ffmpeg");
@@ -167,21 +176,19 @@ BatchRenderResult render_frames(GlContext& context, const BatchRenderOptions& op
       result.notes.push_back("MP4 skipped: ffmpeg is not on PATH");
     } else {
       const std::string video = (fs::path(options.out_dir) / "render.mp4").string();
-      const std::string tmp = (fs::path(options.out_dir) / ".render.tmp.mp4").string();
+      TempFile tmp(video);
       const double fps = source.dt_s > 0 ? 1.0 / source.dt_s : 12.0;
       std::ostringstream cmd;
       // Even sizes are required by yuv420p; pad by one pixel when needed.
       cmd << shell_quote(ffmpeg) << " -y -loglevel error -framerate " << fps << " -start_number "
           << first << " -i " << shell_quote((fs::path(options.out_dir) / "frame_%04d.png").string())
-          << " -frames:v " << (last - first + 1)
-          << " -vf " << shell_quote("pad=ceil(iw/2)*2:ceil(ih/2)*2")
-          << " -pix_fmt yuv420p -f mp4 " << shell_quote(tmp);
+          << " -frames:v " << (last - first + 1) << " -vf "
+          << shell_quote("pad=ceil(iw/2)*2:ceil(ih/2)*2") << " -pix_fmt yuv420p -f mp4 "
+          << shell_quote(tmp.path());
       if (std::system(cmd.str().c_str()) == 0) {
-        fs::rename(tmp, video, ec);
-        if (ec) throw IoError(video, "cannot move the encoded video into place: " + ec.message());
+        tmp.commit();
         result.video = video;
       } else {
-        fs::remove(tmp, ec);
         result.notes.push_back("MP4 skipped: ffmpeg failed (see its message above)");
       }
     }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 
 #include "engine/core/error.h"
 
@@ -67,6 +68,49 @@ size_t element_count(const Shape& s) {
   return n;
 }
 
+// Largest array one read may allocate, in bytes (numbers are read as 8-byte values).
+constexpr uint64_t kMaxReadBytes = uint64_t{1} << 30;
+// Deflate, HDF5's standard compression filter, shrinks data by at most this factor.
+constexpr uint64_t kMaxCompressionRatio = 1032;
+
+uint64_t saturating_mul(uint64_t a, uint64_t b) {
+  if (a != 0 && b > std::numeric_limits<uint64_t>::max() / a) {
+    return std::numeric_limits<uint64_t>::max();
+  }
+  return a * b;
+}
+
+// Refuses a read whose declared shape cannot be real: more bytes than the file (times the best
+// compression ratio when the dataset is filtered) can hold, or more than one read may allocate.
+// A corrupted dataspace otherwise makes the read allocate whatever the header says.
+void check_declared_size(const Source& src, const Shape& s, const std::string& file,
+                         const std::string& field) {
+  uint64_t count = 1;
+  for (hsize_t d : s.dims) count = saturating_mul(count, d);
+  const uint64_t stored = saturating_mul(count, s.type_size);
+  const uint64_t in_memory = saturating_mul(count, std::max<uint64_t>(8, s.type_size));
+  std::error_code ec;
+  const uint64_t file_bytes = std::filesystem::file_size(file, ec);
+  if (ec) return;  // not a plain file on disk: nothing to compare with
+  bool filtered = false;
+  if (!src.attribute) {
+    Handle dcpl(H5Dget_create_plist(src.id));
+    filtered = dcpl.valid() && H5Pget_nfilters(dcpl.get()) > 0;
+  }
+  const uint64_t limit = filtered ? saturating_mul(file_bytes, kMaxCompressionRatio) : file_bytes;
+  if (stored > limit) {
+    throw FormatError(file, field,
+                      "declares " + s.text() + " (" + std::to_string(stored) +
+                          " bytes), more than the file of " + std::to_string(file_bytes) +
+                          " bytes can hold (corrupt?)");
+  }
+  if (in_memory > kMaxReadBytes) {
+    throw FormatError(file, field,
+                      "declares " + s.text() + ", more than the read limit of " +
+                          std::to_string(kMaxReadBytes >> 20) + " MiB");
+  }
+}
+
 bool is_numeric(const Shape& s) {
   return s.type_class == H5T_INTEGER || s.type_class == H5T_FLOAT || s.type_class == H5T_ENUM;
 }
@@ -77,6 +121,7 @@ bool is_integral(const Shape& s) { return s.type_class == H5T_INTEGER || s.type_
 // numbers in HDF5, so they are read as their native base integer and decoded here.
 std::vector<int64_t> read_enum(const Source& src, const Shape& s, const std::string& file,
                                const std::string& field) {
+  check_declared_size(src, s, file, field);
   Handle file_type = type_of(src);
   Handle mem_type(H5Tget_native_type(file_type.get(), H5T_DIR_ASCEND));
   const size_t n = element_count(s);
@@ -121,6 +166,7 @@ std::vector<double> read_doubles(const Source& src, const Shape& s, const std::s
     const std::vector<int64_t> ints = read_enum(src, s, file, field);
     return std::vector<double>(ints.begin(), ints.end());
   }
+  check_declared_size(src, s, file, field);
   std::vector<double> out(element_count(s));
   if (!out.empty() && read_raw(src, H5T_NATIVE_DOUBLE, out.data()) < 0) {
     throw FormatError(file, field, with_hdf5_reason("read failed"));
@@ -132,6 +178,7 @@ std::vector<int64_t> read_ints(const Source& src, const Shape& s, const std::str
                                const std::string& field) {
   if (!is_integral(s)) throw FormatError(file, field, "expected integers, got " + s.text());
   if (s.type_class == H5T_ENUM) return read_enum(src, s, file, field);
+  check_declared_size(src, s, file, field);
   std::vector<int64_t> out(element_count(s));
   if (!out.empty() && read_raw(src, H5T_NATIVE_INT64, out.data()) < 0) {
     throw FormatError(file, field, with_hdf5_reason("read failed"));
@@ -144,6 +191,7 @@ std::vector<std::string> read_string_values(const Source& src, const Shape& s,
   if (s.type_class != H5T_STRING) {
     throw FormatError(file, field, "expected strings, got " + s.text());
   }
+  check_declared_size(src, s, file, field);
   Handle file_type = type_of(src);
   const size_t n = element_count(s);
   std::vector<std::string> out;
@@ -374,25 +422,22 @@ bool Group::has_dataset(const std::string& name) const {
   return H5Iget_type(object.get()) == H5I_DATASET;
 }
 
+// H5Literate callback: appends each link name to the vector in `names`.
+static herr_t collect_link_name(hid_t, const char* name, const H5L_info_t*, void* names) {
+  static_cast<std::vector<std::string>*>(names)->emplace_back(name);
+  return 0;
+}
+
 std::vector<std::string> Group::children() const {
-  H5G_info_t info;
-  if (H5Gget_info(id(), &info) < 0) {
+  // One pass in the order the links are stored, sorted here: asking for the i-th name by name
+  // order (H5Lget_name_by_idx) rebuilds HDF5's sorted link table on every call, which makes
+  // listing N frames cost N^2.
+  std::vector<std::string> names;
+  hsize_t next = 0;
+  if (H5Literate(id(), H5_INDEX_NAME, H5_ITER_NATIVE, &next, collect_link_name, &names) < 0) {
     throw FormatError(file_, path_.empty() ? "/" : path_, with_hdf5_reason("cannot list group"));
   }
-  std::vector<std::string> names;
-  names.reserve(info.nlinks);
-  for (hsize_t i = 0; i < info.nlinks; ++i) {
-    const ssize_t len =
-        H5Lget_name_by_idx(id(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
-    if (len < 0) {
-      throw FormatError(file_, path_.empty() ? "/" : path_, with_hdf5_reason("cannot list group"));
-    }
-    std::string name(static_cast<size_t>(len) + 1, '\0');
-    H5Lget_name_by_idx(id(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(),
-                       H5P_DEFAULT);
-    name.resize(static_cast<size_t>(len));
-    names.push_back(std::move(name));
-  }
+  std::sort(names.begin(), names.end());
   return names;
 }
 
@@ -490,6 +535,20 @@ std::vector<int64_t> Group::read_int_vector(const std::string& name, int64_t siz
   }
   require_dims(s, {size}, "integers", file_, field);
   return read_ints({ds.get(), false}, s, file_, field);
+}
+
+std::vector<double> Group::read_array(const std::string& name, const std::vector<int64_t>& dims,
+                                      Shape* shape_out) const {
+  Handle ds = open_dataset(name);
+  const Shape s = shape_of({ds.get(), false});
+  const std::string field = child_path(name);
+  if (!is_numeric(s)) {
+    throw FormatError(file_, field,
+                      "expected " + expected_text(dims, "numbers") + ", got " + s.text());
+  }
+  require_dims(s, dims, "numbers", file_, field);
+  if (shape_out != nullptr) *shape_out = s;
+  return read_doubles({ds.get(), false}, s, file_, field);
 }
 
 double Group::read_scalar(const std::string& name) const {

@@ -108,6 +108,10 @@ class Group {
   std::vector<double> read_vector(const std::string& name, int64_t size) const;
   /// Integer dataset `name` of shape `[N]` (exactly `size` if size >= 0).
   std::vector<int64_t> read_int_vector(const std::string& name, int64_t size) const;
+  /// Numeric dataset `name` of any rank with the extents `dims` (-1: any), row-major, as doubles;
+  /// `shape_out` (if given) receives its shape.
+  std::vector<double> read_array(const std::string& name, const std::vector<int64_t>& dims,
+                                 Shape* shape_out = nullptr) const;
   /// Numeric dataset `name` holding one value (scalar, or shape `[1]`).
   double read_scalar(const std::string& name) const;
   /// Integer dataset `name` holding one value (scalar, or shape `[1]`).

@@ -1,7 +1,9 @@
 // Rollout file writer and reader (layout in rollout_file.h).
 #include "engine/io/rollout_file.h"
 
+#include <cmath>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -30,31 +32,13 @@ void write_tensor3(const h5::Group& g, const std::string& name, const std::vecto
   }
 }
 
-// Reads a numeric rank-3 dataset of shape [d0,d1,d2] (−1: any) as doubles.
+// Reads a numeric rank-3 dataset of shape [d0,d1,d2] (−1: any) as doubles; the first extent goes
+// to `d0_out` when given.
 std::vector<double> read_tensor3(const h5::Group& g, const std::string& name, int64_t d0,
-                                 int64_t d1, int64_t d2) {
-  const h5::Shape s = g.shape(name);
-  const std::string field = g.child_path(name);
-  if (s.type_class != H5T_FLOAT && s.type_class != H5T_INTEGER) {
-    throw FormatError(g.file(), field, "expected numbers, got " + s.text());
-  }
-  const int64_t want[3] = {d0, d1, d2};
-  bool ok = s.dims.size() == 3;
-  for (size_t i = 0; ok && i < 3; ++i) {
-    ok = want[i] < 0 || static_cast<int64_t>(s.dims[i]) == want[i];
-  }
-  if (!ok) {
-    auto dim = [](int64_t d) { return d < 0 ? std::string("*") : std::to_string(d); };
-    throw FormatError(
-        g.file(), field,
-        "expected shape [" + dim(d0) + "," + dim(d1) + "," + dim(d2) + "], got " + s.dims_text());
-  }
-  std::vector<double> out(static_cast<size_t>(s.dims[0] * s.dims[1] * s.dims[2]));
-  h5::Handle ds(H5Dopen2(g.id(), name.c_str(), H5P_DEFAULT));
-  if (!ds.valid() || (!out.empty() && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL,
-                                              H5P_DEFAULT, out.data()) < 0)) {
-    throw FormatError(g.file(), field, "read failed: " + h5::take_error());
-  }
+                                 int64_t d1, int64_t d2, int64_t* d0_out = nullptr) {
+  h5::Shape s;
+  std::vector<double> out = g.read_array(name, {d0, d1, d2}, &s);
+  if (d0_out != nullptr) *d0_out = static_cast<int64_t>(s.dims[0]);
   return out;
 }
 
@@ -82,6 +66,47 @@ std::string required_string(const h5::Group& root, const char* name) {
 template <typename T>
 std::vector<T> narrow_ints(const std::vector<int64_t>& v) {
   return std::vector<T>(v.begin(), v.end());
+}
+
+void require_finite(const std::vector<double>& v, const std::string& path,
+                    const std::string& field) {
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i]) || v[i] < 0) {
+      throw FormatError(path, field,
+                        "value " + std::to_string(v[i]) + " at frame " + std::to_string(i) +
+                            " is not a finite distance >= 0");
+    }
+  }
+}
+
+// What Rollout::validate does not cover: metrics and poses are finite, rotations are unit
+// quaternions, every point's object has a pose, and the sampling voxel is a length.
+void validate_read_values(const Rollout& r, const std::string& path) {
+  require_finite(r.point_error, path, "metrics/point_error");
+  require_finite(r.contact_distance_truth, path, "metrics/contact_distance_truth");
+  require_finite(r.contact_distance_predicted, path, "metrics/contact_distance_predicted");
+  if (!std::isfinite(r.sampling_voxel) || r.sampling_voxel < 0) {
+    throw FormatError(path, "@sampling_voxel", "must be a finite length >= 0");
+  }
+  for (size_t f = 0; f < r.poses.size(); ++f) {
+    for (size_t j = 0; j < r.poses[f].size(); ++j) {
+      const Pose& p = r.poses[f][j];
+      if (!p.position.allFinite() || !p.rotation.coeffs().allFinite() ||
+          std::abs(p.rotation.norm() - 1.0) > 1e-3) {
+        throw FormatError(path, "poses/fitted",
+                          "pose of object " + std::to_string(j) + " at frame " + std::to_string(f) +
+                              " is not finite with a unit quaternion");
+      }
+    }
+  }
+  const std::set<int32_t> posed(r.pose_object_ids.begin(), r.pose_object_ids.end());
+  for (size_t i = 0; i < r.object_ids.size(); ++i) {
+    if (posed.count(r.object_ids[i]) == 0) {
+      throw FormatError(path, "points/object_ids",
+                        "object " + std::to_string(r.object_ids[i]) + " of point " +
+                            std::to_string(i) + " is not in poses/object_ids");
+    }
+  }
 }
 
 }  // namespace
@@ -176,9 +201,8 @@ Rollout read_rollout(const std::string& path) {
   if (points.has_dataset("faces")) r.faces = points.read_int_matrix("faces", -1, 3).cast<int32_t>();
 
   const h5::Group positions = root.group("positions");
-  const std::vector<double> predicted = read_tensor3(positions, "predicted", -1, n, 3);
-  const int64_t t = n > 0 ? static_cast<int64_t>(predicted.size()) / (n * 3)
-                          : static_cast<int64_t>(positions.shape("predicted").dims.at(0));
+  int64_t t = 0;
+  const std::vector<double> predicted = read_tensor3(positions, "predicted", -1, n, 3, &t);
   r.predicted = unflatten(predicted, t, n);
   r.truth = unflatten(read_tensor3(positions, "truth", t, n, 3), t, n);
 
@@ -208,6 +232,7 @@ Rollout read_rollout(const std::string& path) {
   } catch (const ValueError& e) {
     throw FormatError(path, e.name(), e.what());
   }
+  validate_read_values(r, path);
   return r;
 }
 

@@ -29,20 +29,41 @@ std::string frame_name(int frame) {
   return buf;
 }
 
+// Largest magnitude of any stored number (coordinates, scales, masses): scenes are metre-like,
+// and values near the double range overflow bounds, grids and cameras downstream.
+constexpr double kMaxMagnitude = 1e7;
+
+bool in_bounds(double v) { return std::isfinite(v) && std::abs(v) <= kMaxMagnitude; }
+
 void require_finite(const MatrixXdR& m, const Group& g, const std::string& name) {
   for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    if (!m.row(r).allFinite()) {
-      throw FormatError(g.file(), g.child_path(name),
-                        "non-finite value (NaN or inf) in row " + std::to_string(r));
+    for (Eigen::Index c = 0; c < m.cols(); ++c) {
+      if (!in_bounds(m(r, c))) {
+        throw FormatError(g.file(), g.child_path(name),
+                          "non-finite or out-of-range value " + std::to_string(m(r, c)) +
+                              " in row " + std::to_string(r) + " (accepted: finite, within +-1e7)");
+      }
     }
   }
 }
 
 void require_finite(const std::vector<double>& v, const Group& g, const std::string& name) {
   for (size_t i = 0; i < v.size(); ++i) {
-    if (!std::isfinite(v[i])) {
+    if (!in_bounds(v[i])) {
       throw FormatError(g.file(), g.child_path(name),
-                        "non-finite value (NaN or inf) at index " + std::to_string(i));
+                        "non-finite or out-of-range value " + std::to_string(v[i]) + " at index " +
+                            std::to_string(i) + " (accepted: finite, within +-1e7)");
+    }
+  }
+}
+
+// Physical parameters: masses, friction and restitution coefficients are never negative.
+void require_non_negative(const std::vector<double>& v, const Group& g, const char* name) {
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (v[i] < 0) {
+      throw FormatError(
+          g.file(), g.child_path(name),
+          "must be >= 0, got " + std::to_string(v[i]) + " at index " + std::to_string(i));
     }
   }
 }
@@ -173,6 +194,21 @@ Quat read_rotation(const MatrixXdR& rows, Eigen::Index r, const FileConvention& 
   return Quat(rotation).normalized();
 }
 
+// `name` with bytes outside printable ASCII written as \xNN, so an error stays one readable line.
+std::string printable(const std::string& name) {
+  std::string out;
+  for (unsigned char c : name) {
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    }
+  }
+  return out;
+}
+
 // Frame groups must be named by consecutive integers from 0 ("0000", "0001", ...).
 std::vector<std::string> frame_groups(const Group& frames) {
   std::map<int64_t, std::string> by_index;
@@ -181,7 +217,7 @@ std::vector<std::string> frame_groups(const Group& frames) {
         !name.empty() && name.size() <= 9 &&
         std::all_of(name.begin(), name.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
     if (!digits) {
-      throw FormatError(frames.file(), frames.child_path(name),
+      throw FormatError(frames.file(), frames.child_path(printable(name)),
                         "frame groups must be named by their index (0000, 0001, ...)");
     }
     by_index[std::stoll(name)] = name;
@@ -208,9 +244,10 @@ Scene read_scene_file(const Group& root, const FileConvention& conv) {
   const std::optional<double> dt = root.double_attribute("dt");
   if (!dt && !conv.default_dt) throw FormatError(path, "@dt", "missing root attribute");
   scene.dt_s = dt.value_or(conv.default_dt.value_or(0.0));
-  if (!(scene.dt_s > 0) || !std::isfinite(scene.dt_s)) {
+  // An hour between frames is no dynamics scene; a huge dt overflows every velocity.
+  if (!(scene.dt_s > 0) || !(scene.dt_s <= 3600)) {
     throw FormatError(path, "@dt",
-                      "must be a positive number of seconds, got " + std::to_string(scene.dt_s));
+                      "must be in (0, 3600] seconds, got " + std::to_string(scene.dt_s));
   }
 
   const Group statics = root.group("static");
@@ -236,6 +273,16 @@ Scene read_scene_file(const Group& root, const FileConvention& conv) {
       optional_vector(statics, {"friction", "static_friction"}, count, Object{}.friction);
   const std::vector<double> restitution =
       optional_vector(statics, {"restitution", "bounciness"}, count, Object{}.restitution);
+  require_non_negative(mass, statics, "mass");
+  require_non_negative(friction, statics, "friction");
+  require_non_negative(restitution, statics, "restitution");
+  for (size_t i = 0; i < count; ++i) {
+    if (!(scales[i].minCoeff() > 0)) {
+      throw FormatError(
+          path, statics.child_path("scale"),
+          "must be > 0 on every axis, got a non-positive value at index " + std::to_string(i));
+    }
+  }
   const std::vector<Vec3> colors = optional_vec3(statics, "color", count, Object{}.color);
   const std::vector<Role> roles = read_roles(statics, ids);
   const Mat3 abs_axes = conv.axes.cwiseAbs();

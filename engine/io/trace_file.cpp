@@ -1,6 +1,7 @@
 // Trace file writer and reader (layout in trace_file.h).
 #include "engine/io/trace_file.h"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,117 @@ std::string required_string(const h5::Group& root, const char* name) {
   const auto v = root.string_attribute(name);
   if (!v) throw FormatError(root.file(), std::string("@") + name, "missing attribute");
   return *v;
+}
+
+template <typename Matrix>
+void require_finite(const Matrix& m, const std::string& path, const std::string& field) {
+  if (!m.allFinite()) throw FormatError(path, field, "non-finite value (NaN or inf)");
+}
+
+// Every index of `list` is -1 (masked, mask 0) or a point of its source level, and it has one
+// row per point of its query level.
+void validate_list(const TraceList& l, const std::string& path, const std::string& field,
+                   int64_t query_rows, int64_t source_rows) {
+  if (l.index.rows() != query_rows) {
+    throw FormatError(path, field + "/index",
+                      "has " + std::to_string(l.index.rows()) + " rows, expected " +
+                          std::to_string(query_rows) + " (one per query point)");
+  }
+  for (Eigen::Index r = 0; r < l.index.rows(); ++r) {
+    for (Eigen::Index c = 0; c < l.index.cols(); ++c) {
+      const int32_t i = l.index(r, c);
+      if (i < -1 || i >= source_rows || (i == -1 && l.mask(r, c) != 0)) {
+        throw FormatError(path, field + "/index",
+                          "entry " + std::to_string(i) + " in row " + std::to_string(r) +
+                              " is not -1 (masked) or a point in [0, " +
+                              std::to_string(source_rows) + ")");
+      }
+    }
+  }
+}
+
+int64_t level_rows(const ModelTrace& t, int level, const std::string& path,
+                   const std::string& field) {
+  if (level < 0 || level >= static_cast<int>(t.levels.size())) {
+    throw FormatError(path, field,
+                      "level " + std::to_string(level) + " is not in [0, " +
+                          std::to_string(t.levels.size()) + ")");
+  }
+  return t.levels[static_cast<size_t>(level)].points.rows();
+}
+
+// The checks a reader of a trace relies on: finite values, sizes that agree, indices in range.
+void validate_trace(const ModelTrace& t, const std::string& path) {
+  for (size_t l = 0; l < t.levels.size(); ++l) {
+    const TraceLevel& lv = t.levels[l];
+    const std::string where = "levels/" + std::to_string(l);
+    require_finite(lv.points, path, where + "/points");
+    if (!std::isfinite(lv.voxel) || !std::isfinite(lv.radius) || lv.voxel < 0 || lv.radius < 0) {
+      throw FormatError(path, where, "voxel and radius must be finite and >= 0");
+    }
+    if (l > 0) {
+      if (lv.kept.size() != static_cast<size_t>(lv.points.rows())) {
+        throw FormatError(path, where + "/kept", "missing (one index per point of the level)");
+      }
+      const int64_t below = t.levels[l - 1].points.rows();
+      for (size_t i = 0; i < lv.kept.size(); ++i) {
+        if (lv.kept[i] < 0 || lv.kept[i] >= below) {
+          throw FormatError(path, where + "/kept",
+                            "entry " + std::to_string(lv.kept[i]) + " at " + std::to_string(i) +
+                                " is not a point of level " + std::to_string(l - 1));
+        }
+      }
+    }
+    for (const TraceList& list : lv.lists) {
+      const std::string field = where + "/lists/" + list.name;
+      validate_list(list, path, field, level_rows(t, list.query_level, path, field),
+                    level_rows(t, list.source_level, path, field));
+    }
+  }
+  if (t.has_mesh) {
+    require_finite(t.mesh.points, path, "mesh/points");
+    const int64_t points = t.levels.empty() ? 0 : t.levels[0].points.rows();
+    if (t.mesh.faces.size() > 0 &&
+        (t.mesh.faces.minCoeff() < 0 || t.mesh.faces.maxCoeff() >= points)) {
+      throw FormatError(path, "mesh/faces",
+                        "index outside the level-0 points [0, " + std::to_string(points) + ")");
+    }
+    for (int32_t f : t.mesh.face) {
+      if (f < 0 || f >= t.mesh.faces.rows()) {
+        throw FormatError(path, "mesh/face",
+                          "face " + std::to_string(f) + " is not in [0, " +
+                              std::to_string(t.mesh.faces.rows()) + ")");
+      }
+    }
+  }
+  for (const TraceFeatures& f : t.features) {
+    const std::string field = "features/" + f.block;
+    const int64_t rows = level_rows(t, f.level, path, field);
+    if (static_cast<int64_t>(f.norms.size()) != rows) {
+      throw FormatError(path, field,
+                        "has " + std::to_string(f.norms.size()) + " values, expected " +
+                            std::to_string(rows) + " (one per point of level " +
+                            std::to_string(f.level) + ")");
+    }
+    for (double v : f.norms) {
+      if (!std::isfinite(v) || v < 0) {
+        throw FormatError(path, field, "norms must be finite and >= 0");
+      }
+    }
+  }
+  for (size_t i = 0; i < t.queries.size(); ++i) {
+    const TraceQuery& q = t.queries[i];
+    const std::string field = "queries/" + std::to_string(i);
+    level_rows(t, 0, path, field);
+    if (q.point < 0 || q.point >= t.levels[0].points.rows()) {
+      throw FormatError(path, field + "/@point", "is not a level-0 point");
+    }
+    if (q.query_index < 0 || q.query_index >= level_rows(t, q.level, path, field + "/@level")) {
+      throw FormatError(path, field + "/@query_index",
+                        "is not a point of level " + std::to_string(q.level));
+    }
+    require_finite(q.weights, path, field + "/weights");
+  }
 }
 
 }  // namespace
@@ -219,7 +331,44 @@ ModelTrace read_trace(const std::string& path) {
     q.weights = g.read_matrix("weights", static_cast<int64_t>(q.neighbors.size()), -1);
     t.queries.push_back(std::move(q));
   }
+  validate_trace(t, path);
   return t;
+}
+
+void check_trace_matches_scene(const ModelTrace& trace, const Scene& scene,
+                               const std::string& trace_path) {
+  if (trace.frame < 0 || trace.frame >= scene.num_frames()) {
+    throw FormatError(trace_path, "@frame",
+                      "frame " + std::to_string(trace.frame) + " is not in the scene's [0, " +
+                          std::to_string(scene.num_frames()) + ")");
+  }
+  if (trace.levels.empty()) return;
+  const TraceLevel& level0 = trace.levels[0];
+  std::vector<Aabb> boxes(scene.objects.size());
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    boxes[i] = Aabb::of(scene.world_vertices(static_cast<int>(i), trace.frame));
+    // Sampled surface points lie on the object; the margin covers float rounding and
+    // vertex-clustered mesh input.
+    const Vec3 margin = Vec3::Constant(0.25 * (boxes[i].max - boxes[i].min).norm() + 1e-6);
+    boxes[i].min -= margin;
+    boxes[i].max += margin;
+  }
+  for (Eigen::Index p = 0; p < level0.points.rows(); ++p) {
+    const int object = scene.object_index(level0.object_ids[static_cast<size_t>(p)]);
+    if (object < 0) {
+      throw FormatError(trace_path, "levels/0/object_ids",
+                        "object " + std::to_string(level0.object_ids[static_cast<size_t>(p)]) +
+                            " is not in the scene (the trace belongs to another scene)");
+    }
+    const Vec3 x = level0.points.row(p).transpose();
+    const Aabb& box = boxes[static_cast<size_t>(object)];
+    if ((x.array() < box.min.array()).any() || (x.array() > box.max.array()).any()) {
+      throw FormatError(trace_path, "levels/0/points",
+                        "point " + std::to_string(p) + " is not on its object at frame " +
+                            std::to_string(trace.frame) +
+                            " of the scene (the trace belongs to another scene)");
+    }
+  }
 }
 
 bool is_trace_file(const std::string& path) {

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "engine/core/types.h"
+#include "engine/scene/scene.h"
 
 namespace dynscope {
 
@@ -110,7 +111,14 @@ void write_trace(const ModelTrace& trace, const std::string& path);
 bool is_trace_file(const std::string& path);
 
 /// Reads a trace file. Throws IoError if missing or not HDF5, FormatError naming the field for a
-/// wrong format, a missing dataset or a shape that disagrees.
+/// wrong format, a missing dataset, a shape that disagrees (e.g. feature norms that are not one
+/// per point of their level), an index outside its level or a non-finite value.
 ModelTrace read_trace(const std::string& path);
+
+/// Throws FormatError naming `trace_path` unless `trace` was recorded on `scene`: its frame is a
+/// frame of the scene and every level-0 point belongs to an object of the scene and lies on that
+/// object (within a quarter of its bounding-box diagonal) at that frame.
+void check_trace_matches_scene(const ModelTrace& trace, const Scene& scene,
+                               const std::string& trace_path);
 
 }  // namespace dynscope

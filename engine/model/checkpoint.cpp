@@ -12,6 +12,7 @@
 
 #include "engine/core/error.h"
 #include "engine/io/temp_file.h"
+#include "engine/io/zip_check.h"
 
 namespace dynscope {
 
@@ -32,6 +33,9 @@ std::vector<std::pair<std::string, torch::Tensor>> model_tensors(const torch::nn
 }
 
 torch::serialize::InputArchive open_archive(const std::string& path) {
+  // LibTorch's reader never checks the archive's CRCs: a flipped bit in a weight would load.
+  // Verified first, so a corrupt checkpoint is an error and not a silently different model.
+  verify_zip_archive(path);
   torch::serialize::InputArchive archive;
   try {
     archive.load_from(path);

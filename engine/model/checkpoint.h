@@ -17,8 +17,10 @@ constexpr int64_t kCheckpointFormat = 1;
 void save_checkpoint(const std::string& path, const DynamicsModel& model);
 
 /// Builds the model described by the stored config and loads its weights and statistics.
-/// Throws IoError for a missing, truncated or foreign file, FormatError for a bad config, and
-/// Error naming the key for weights that do not match the architecture.
+/// The archive's structure and the CRC-32 of every member are verified first. Throws IoError for
+/// a missing, truncated or foreign file, FormatError for a bad config or a corrupt archive (the
+/// member whose CRC fails), and Error naming the key for weights that do not match the
+/// architecture.
 DynamicsModel load_checkpoint(const std::string& path);
 
 /// Loads the weights and statistics of `path` into an existing model. Throws Error naming the

@@ -73,7 +73,8 @@ std::string manifest_text(const DatasetOptions& options, const std::vector<std::
   }
   m["files"] = files;
   m["split"] = split;
-  m["split_rule"] = "index % 10: 0-7 train, 8 val, 9 test";
+  m["split_rule"] =
+      "index % 10: 0-7 train, 8 val, 9 test (3 to 9 scenes: last test, one before val)";
   return m.dump(2) + "\n";
 }
 
@@ -85,7 +86,11 @@ std::string scene_file_name(const std::string& scenario, int64_t index) {
   return scenario + buf;
 }
 
-std::string split_of(int64_t index) {
+std::string split_of(int64_t index, int64_t count) {
+  if (count < 10) {
+    if (count < 3 || index < count - 2) return "train";
+    return index == count - 2 ? "val" : "test";
+  }
   const int64_t r = index % 10;
   return r < 8 ? "train" : (r == 8 ? "val" : "test");
 }
@@ -98,11 +103,13 @@ std::vector<Mesh> load_mesh_dir(const std::string& dir) {
 
 void check_dataset_options(const DatasetOptions& options) {
   if (!is_scenario(options.scenario)) scenario_summary(options.scenario);  // throws, lists names
-  if (options.count <= 0) {
-    throw ValueError("count", "must be at least 1, got " + std::to_string(options.count));
+  if (options.count < 1 || options.count > kMaxDatasetCount) {
+    throw ValueError("count", "must be an integer in [1, " + std::to_string(kMaxDatasetCount) +
+                                  "], got " + std::to_string(options.count));
   }
-  if (options.jobs <= 0) {
-    throw ValueError("jobs", "must be at least 1, got " + std::to_string(options.jobs));
+  if (options.jobs < 1 || options.jobs > kMaxDatasetJobs) {
+    throw ValueError("jobs", "must be an integer in [1, " + std::to_string(kMaxDatasetJobs) +
+                                 "], got " + std::to_string(options.jobs));
   }
   if (scenario_needs_meshes(options.scenario) && options.meshes_dir.empty()) {
     throw ValueError("meshes", "scenario " + options.scenario + " needs --meshes DIR");
@@ -157,7 +164,7 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
         e.index = i;
         e.seed = derive_seed(options.seed, static_cast<uint64_t>(i));
         e.file = scene_file_name(options.scenario, i);
-        e.split = split_of(i);
+        e.split = split_of(i, options.count);
         const Scene scene = generate_scene(options.scenario, e.seed, scenario_options);
         e.num_objects = static_cast<int>(scene.objects.size());
         if (labelled) e.outcome = contact_outcome(scene) ? 1 : 0;

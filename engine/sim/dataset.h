@@ -40,8 +40,15 @@ struct DatasetSummary {
 /// File name of scene `index`: "<scenario>_<index zero-padded to 4 digits>.h5".
 std::string scene_file_name(const std::string& scenario, int64_t index);
 
-/// Deterministic 80/10/10 split by index: index % 10 in 0..7 "train", 8 "val", 9 "test".
-std::string split_of(int64_t index);
+/// Deterministic 80/10/10 split of scene `index` of `count`: index % 10 in 0..7 "train", 8 "val",
+/// 9 "test" from 10 scenes on; with 3 to 9 scenes the last is "test", the one before "val" and
+/// the rest "train" (so every split has a scene); with 1 or 2 every scene is "train".
+std::string split_of(int64_t index, int64_t count);
+
+/// Largest --count of one dataset (a larger one is a typing error, not a dataset).
+constexpr int64_t kMaxDatasetCount = 10000000;
+/// Largest --jobs of one dataset generation.
+constexpr int kMaxDatasetJobs = 1024;
 
 /// Loads every mesh file (sorted by name) of `dir` through import_mesh. Throws IoError if the
 /// directory cannot be read or holds no mesh file, or a file fails to import.

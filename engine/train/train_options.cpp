@@ -1,14 +1,60 @@
 // TrainOptions JSON round trip and resolution against the dataset scale.
 #include "engine/train/train_options.h"
 
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
 
 namespace dynscope {
+namespace {
+
+// Largest value of an integer recipe field: seeds are uint64, max_steps and dataset counts int64,
+// every other integer field an `int`. No integer field of a recipe may be negative.
+double max_integer_field(const std::string& key) {
+  if (key == "seed") return 18446744073709551615.0;
+  if (key == "max_steps" || key == "count") return 9223372036854775807.0;
+  return std::numeric_limits<int32_t>::max();
+}
+
+// Checks the numbers of a recipe against the fields of `reference` (the JSON of default options:
+// an integer there is an integer field), before nlohmann's conversions truncate 3.7 to 3, wrap
+// -1 into a huge seed or 2^32 + 1 into 1. Throws FormatError(source, "path.to.field", ...) naming
+// the accepted values.
+void check_numbers(const nlohmann::json& given, const nlohmann::json& reference,
+                   const std::string& source, const std::string& prefix) {
+  for (auto it = given.begin(); it != given.end(); ++it) {
+    const std::string field = prefix + it.key();
+    const nlohmann::json& value = it.value();
+    if (!reference.contains(it.key())) continue;
+    const nlohmann::json& ref = reference.at(it.key());
+    if (ref.is_object() && value.is_object()) {
+      check_numbers(value, ref, source, field + ".");
+      continue;
+    }
+    if (!value.is_number()) continue;  // wrong types are reported when the field is read
+    const double v = value.get<double>();
+    if (!std::isfinite(v)) throw FormatError(source, field, "must be a finite number");
+    if (!ref.is_number_integer()) continue;
+    const double hi = max_integer_field(it.key());
+    if (v != std::floor(v) || v < 0 || v > hi) {
+      const std::string max = it.key() == "seed" ? "18446744073709551615"
+                              : hi > 3e9         ? "9223372036854775807"
+                                                 : "2147483647";
+      throw FormatError(source, field,
+                        "must be an integer in [0, " + max + "], got " + value.dump());
+    }
+  }
+}
+
+}  // namespace
 
 std::string TrainOptions::to_json() const {
   nlohmann::json j;
@@ -61,6 +107,14 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     throw FormatError(source, "recipe", std::string("malformed JSON: ") + e.what());
   }
   if (!j.is_object()) throw FormatError(source, "recipe", "expected a JSON object");
+  check_numbers(j, nlohmann::json::parse(TrainOptions().to_json()), source, "");
+  if (j.contains("datasets") && j.at("datasets").is_array()) {
+    const nlohmann::json entry = {{"count", int64_t{1}}, {"seed", uint64_t{0}}};
+    for (size_t i = 0; i < j.at("datasets").size(); ++i) {
+      const nlohmann::json& d = j.at("datasets").at(i);
+      if (d.is_object()) check_numbers(d, entry, source, "datasets[" + std::to_string(i) + "].");
+    }
+  }
   TrainOptions o = base;
   std::string field;
   try {
@@ -154,20 +208,33 @@ void TrainOptions::resolve(const std::string& scenario) {
   if (model.input == InputMode::kMesh && !faces) model.input = InputMode::kPoints;
   if (sampling.voxel == 0) sampling.voxel = default_sampling_voxel(scenario);
   model.validate();
-  auto positive = [](const char* name, double v) {
-    if (!(v > 0)) throw ValueError(name, "must be positive, got " + std::to_string(v));
+  // Ranges: a value outside is a typing error (or a corrupt recipe), never a run to start.
+  auto in_range = [](const char* name, double v, double lo, double hi, bool lo_open) {
+    if (std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi) return;
+    char text[160];
+    std::snprintf(text, sizeof text, "must be a finite number in %s%.6g, %.6g], got %.6g",
+                  lo_open ? "(" : "[", lo, hi, v);
+    throw ValueError(name, text);
   };
-  positive("epochs", epochs);
-  positive("samples-per-scene", samples_per_scene);
-  positive("batch", batch);
-  positive("lr", lr);
-  positive("huber-delta", huber_delta);
-  positive("checkpoint-every", checkpoint_every);
-  positive("val-frames", val_frames);
-  if (noise_std < 0) throw ValueError("noise-std", "must be >= 0");
-  if (max_steps < 0) throw ValueError("max-steps", "must be >= 0");
-  if (val_scenes < 0) throw ValueError("val-scenes", "must be >= 0");
-  if (threads < 0) throw ValueError("threads", "must be >= 0");
+  in_range("epochs", epochs, 1, 1e6, false);
+  in_range("samples-per-scene", samples_per_scene, 1, 1e6, false);
+  in_range("batch", batch, 1, 65536, false);
+  in_range("lr", lr, 0, 10, true);
+  in_range("huber-delta", huber_delta, 0, 1e6, true);
+  in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
+  in_range("val-frames", val_frames, 1, 1e6, false);
+  in_range("noise-std", noise_std, 0, 1e3, false);
+  in_range("max-steps", static_cast<double>(max_steps), 0, 1e15, false);
+  in_range("val-scenes", val_scenes, 0, 1e6, false);
+  in_range("threads", threads, 0, kMaxComputeThreads, false);
+  in_range("sampling.voxel", sampling.voxel, 0, 1e6, true);
+  in_range("sampling.oversample", sampling.oversample, 0, 1e4, true);
+  in_range("model_config.width", model.width, 1, 4096, false);
+  in_range("model_config.k", model.k, 1, 1024, false);
+  in_range("model_config.k_relational", model.k_relational, 1, 1024, false);
+  in_range("model_config.c_mid", model.c_mid, 1, 1024, false);
+  in_range("model_config.bottleneck_blocks", model.bottleneck_blocks, 0, 64, false);
+  in_range("model_config.stem_blocks", model.stem_blocks, 0, 64, false);
   if (out.empty()) throw ValueError("out", "no checkpoint path given");
   if (data_dirs.empty()) throw ValueError("data", "no dataset directory given");
   for (const DatasetRecipe& d : datasets) {

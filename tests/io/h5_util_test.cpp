@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
 #include "tests/io/io_test_util.h"
 
 namespace dynscope::h5 {
@@ -181,6 +185,50 @@ TEST_F(H5UtilTest, FailuresReportHdf5sReason) {
 TEST_F(H5UtilTest, CreateInMissingDirectoryThrowsIoError) {
   const std::string bad = dir_.file("no/such/dir.h5");
   expect_contains(error_of<IoError>([&] { Group::create_file(bad); }), {bad, "cannot be created"});
+}
+
+TEST_F(H5UtilTest, ChildrenAreSortedWhateverTheCreationOrder) {
+  std::vector<std::string> expected;
+  {
+    Group root = Group::create_file(path_);
+    // Enough links for HDF5's dense (B-tree) storage, created out of name order.
+    for (int i = 0; i < 300; ++i) {
+      char name[16];
+      std::snprintf(name, sizeof name, "%04d", (i * 7) % 300);
+      root.create_group(name);
+      expected.push_back(name);
+    }
+    root.close();
+  }
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(Group::open_file(path_).children(), expected);
+}
+
+// A dataset whose header declares `dims` doubles, none of them written (so the file stays small).
+void create_unwritten_dataset(const std::string& path, const std::vector<hsize_t>& dims,
+                              bool deflate) {
+  Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE));
+  if (deflate) {
+    std::vector<hsize_t> chunk(dims.size(), 1);
+    chunk.back() = std::min<hsize_t>(dims.back(), 1024);
+    H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
+    H5Pset_deflate(dcpl.get(), 6);
+  }
+  Handle ds(H5Dcreate2(file.get(), "big", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
+                       H5P_DEFAULT));
+  ASSERT_TRUE(ds.valid());
+}
+
+TEST_F(H5UtilTest, DeclaredSizesBeyondTheFileAreRefusedBeforeAllocating) {
+  create_unwritten_dataset(path_, {1000000000, 3}, false);  // 24 GB declared, a few KB on disk
+  expect_contains(error_of<FormatError>([&] { Group::open_file(path_).read_matrix("big", -1, 3); }),
+                  {path_, "big", "[1000000000,3] float64", "more than the file"});
+  // Compressed data may expand, but not past deflate's best ratio.
+  create_unwritten_dataset(path_, {400000000}, true);
+  expect_contains(error_of<FormatError>([&] { Group::open_file(path_).read_vector("big", -1); }),
+                  {path_, "big", "more than the file"});
 }
 
 TEST(H5Handle, ClosesOnceAndMoves) {

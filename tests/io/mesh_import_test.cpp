@@ -187,6 +187,92 @@ TEST_F(MeshImportTest, NonMeshFilesThrowIoErrorNamingTheFile) {
   expect_contains(error_of<IoError>([&] { import_mesh(missing); }), {missing, "no such file"});
 }
 
+// The OFF file of assimp's corpus that made the importer reserve 3.5e11 vertices (309 bytes).
+const char* kHugeOff = R"(OFF
+353535235358 6 0
+-0.5 -0.5 0.5
+0.5 -0.5 0.5
+-0.5 0.5 0.5
+0.5 0.5 0.5
+-0.5 0.5 -0.5
+0.5 0.5 -0.5
+-0.5 -0.5 -0.5
+0.5 -0.5 -0.5
+4 0 1 3 2
+4 2 3 5 4
+4 4 5 7 6
+4 6 7 1 0
+4 1 7 5 3
+4 6 0 2 4
+)";
+
+TEST_F(MeshImportTest, DeclaredCountsBeyondTheFileAreRefusedBeforeImport) {
+  const std::string off = dir_.file("huge.off");
+  test::write_text(off, kHugeOff);
+  expect_contains(error_of<IoError>([&] { import_mesh(off); }),
+                  {off, "header declares 353535235358 vertices", "corrupt or truncated"});
+
+  // Binary PLY: 10^9 float vertices cannot fit in a few dozen bytes.
+  const std::string ply = dir_.file("huge.ply");
+  test::write_text(ply,
+                   "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                   "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                   "property list uchar int vertex_indices\nend_header\n0123456789abcdef");
+  expect_contains(error_of<IoError>([&] { import_mesh(ply); }),
+                  {ply, "header declares", "only 16 follow"});
+
+  // A PLY header cut short (assimp's reader can spin on it).
+  const std::string cut = dir_.file("cut.ply");
+  test::write_text(cut, "ply\nformat ascii 1.0\nelement vertex 3\nproperty fl");
+  expect_contains(error_of<IoError>([&] { import_mesh(cut); }), {cut, "without end_header"});
+
+  // Elements without properties take no bytes: the memory ceiling bounds them instead.
+  const std::string empty = dir_.file("empty_elements.ply");
+  test::write_text(empty,
+                   "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+                   "end_header\n");
+  expect_contains(error_of<IoError>([&] { import_mesh(empty); }),
+                  {empty, "more than the mesh import limit"});
+}
+
+TEST_F(MeshImportTest, MemoryCeilingIsConfigurable) {
+  const std::string path = dir_.file("cube.off");
+  test::write_text(path, std::string(kHugeOff).replace(4, 12, "8"));  // the honest header
+  EXPECT_EQ(import_mesh(path).num_faces(), 12);
+  MeshImportOptions tight;
+  tight.max_memory_bytes = 1000;  // 8 vertices + 6 faces need more than this
+  expect_contains(error_of<IoError>([&] { import_mesh(path, tight); }),
+                  {path, "more than the mesh import limit"});
+  tight.max_memory_bytes = 100;  // smaller than the file itself
+  expect_contains(error_of<IoError>([&] { import_mesh(path, tight); }),
+                  {path, "more than the mesh import limit"});
+}
+
+TEST_F(MeshImportTest, FaceIndexPastTheVerticesIsAnError) {
+  const std::string path = dir_.file("bad_index.ply");
+  test::write_text(path,
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                   "property float y\nproperty float z\nelement face 1\n"
+                   "property list uchar int vertex_indices\nend_header\n"
+                   "0 0 0\n1 0 0\n0 1 0\n3 0 1 2000000000\n");
+  expect_contains(error_of<IoError>([&] { import_mesh(path); }), {path + ": "});
+}
+
+TEST_F(MeshImportTest, IsolatedImportIsBoundedInTimeAndMatchesTheInProcessOne) {
+  const std::string path = dir_.file("cube.obj");
+  test::write_text(path, kCubeObj);
+  MeshImportOptions here;
+  here.isolate = false;
+  const Mesh isolated = import_mesh(path);
+  const Mesh local = import_mesh(path, here);
+  EXPECT_EQ(isolated.vertices, local.vertices);
+  EXPECT_EQ(isolated.faces, local.faces);
+  MeshImportOptions no_time;
+  no_time.max_seconds = 0.0;
+  expect_contains(error_of<IoError>([&] { import_mesh(path, no_time); }),
+                  {path, "did not finish within"});
+}
+
 TEST(MeshFile, RecognisesAssimpExtensions) {
   EXPECT_TRUE(is_mesh_file("a/b/cube.obj"));
   EXPECT_TRUE(is_mesh_file("CUBE.STL"));

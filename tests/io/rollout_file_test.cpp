@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "engine/core/error.h"
 #include "engine/io/h5_util.h"
@@ -151,6 +153,38 @@ TEST(RolloutFileTest, CorruptFilesGiveClearErrors) {
     EXPECT_EQ(e.field(), "metrics/point_error");
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
   }
+}
+
+// The field named by the FormatError that reading `r` back throws ("" if none).
+std::string read_back_error(const Rollout& r, const std::string& name) {
+  const std::string path = temp_path(name);
+  write_rollout(r, path);
+  try {
+    read_rollout(path);
+  } catch (const FormatError& e) {
+    return e.field();
+  }
+  return "";
+}
+
+TEST(RolloutFileTest, NonFiniteMetricsAndPosesAreRejectedOnRead) {
+  Rollout nan_error = make_rollout(true);
+  nan_error.point_error[2] = std::nan("");
+  EXPECT_EQ(read_back_error(nan_error, "nan_error"), "metrics/point_error");
+
+  Rollout inf_contact = make_rollout(true);
+  inf_contact.contact_distance_predicted[1] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(read_back_error(inf_contact, "inf_contact"), "metrics/contact_distance_predicted");
+
+  Rollout nan_pose = make_rollout(false);
+  nan_pose.poses[1][0].position.x() = std::nan("");
+  EXPECT_EQ(read_back_error(nan_pose, "nan_pose"), "poses/fitted");
+
+  Rollout unposed = make_rollout(false);
+  unposed.object_ids[4] = 7;  // no pose for object 7
+  EXPECT_EQ(read_back_error(unposed, "unposed"), "points/object_ids");
+
+  EXPECT_EQ(read_back_error(make_rollout(true), "good"), "");
 }
 
 }  // namespace

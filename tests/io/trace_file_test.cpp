@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -16,7 +17,8 @@ std::string trace_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("dynscope_trace_" + name + ".h5")).string();
 }
 
-TraceList make_list(const std::string& name, int rows, int k, int q, int s) {
+// A list of `rows` x `k` neighbours drawn from `sources` points of level `s`.
+TraceList make_list(const std::string& name, int rows, int k, int q, int s, int sources) {
   TraceList l;
   l.name = name;
   l.query_level = q;
@@ -26,7 +28,7 @@ TraceList make_list(const std::string& name, int rows, int k, int q, int s) {
   for (int i = 0; i < rows; ++i) {
     for (int j = 0; j < k; ++j) {
       const bool valid = (i + j) % 3 != 0;
-      l.index(i, j) = valid ? (i * 7 + j) % 11 : -1;
+      l.index(i, j) = valid ? (i * 7 + j) % sources : -1;
       l.mask(i, j) = valid ? 1 : 0;
     }
   }
@@ -47,8 +49,8 @@ ModelTrace make_trace(bool mesh) {
     if (l > 0) lv.kept = {0, 2, 5};
     lv.voxel = l * 0.075;
     lv.radius = 0.1 * (l + 1);
-    lv.lists.push_back(make_list("same", n, 4, l, l));
-    if (l > 0) lv.lists.push_back(make_list("down", n, 4, l, l - 1));
+    lv.lists.push_back(make_list("same", n, 4, l, l, n));
+    if (l > 0) lv.lists.push_back(make_list("down", n, 4, l, l - 1, 6));
     t.levels.push_back(lv);
   }
   if (mesh) {
@@ -58,7 +60,7 @@ ModelTrace make_trace(bool mesh) {
     t.mesh.points = Points::Random(2, 3);
     t.mesh.face = {0, 1};
     t.mesh.object_ids = {4, 5};
-    t.mesh.lists.push_back(make_list("senders", 2, 1, -1, -1));
+    t.mesh.lists.push_back(make_list("senders", 2, 1, -1, -1, 2));
   }
   t.features.push_back({"decoder.0", 0, {1, 2, 3, 4, 5, 6}});
   t.features.push_back({"encoder.0", 1, {0.5, 0.25, 0.125}});
@@ -146,6 +148,75 @@ TEST(TraceFileTest, WrongFilesGiveClearErrors) {
   ModelTrace bad = make_trace(false);
   bad.queries[0].mask.pop_back();
   EXPECT_THROW(write_trace(bad, trace_path("bad")), ValueError);
+}
+
+// The field named by the FormatError that reading `trace` back throws ("" if none).
+std::string read_back_error(const ModelTrace& trace, const std::string& name) {
+  const std::string path = trace_path(name);
+  write_trace(trace, path);
+  try {
+    read_trace(path);
+  } catch (const FormatError& e) {
+    return e.field();
+  }
+  return "";
+}
+
+TEST(TraceFileTest, InconsistentTracesAreRejectedOnRead) {
+  ModelTrace short_features = make_trace(false);
+  short_features.features[0].norms.pop_back();  // one row short of level 0's six points
+  EXPECT_EQ(read_back_error(short_features, "short"), "features/decoder.0");
+
+  ModelTrace nan_points = make_trace(false);
+  nan_points.levels[1].points(1, 2) = std::nan("");
+  EXPECT_EQ(read_back_error(nan_points, "nan"), "levels/1/points");
+
+  ModelTrace bad_index = make_trace(false);
+  bad_index.levels[1].lists[0].index(0, 1) = 3;  // level 1 has points 0..2
+  EXPECT_EQ(read_back_error(bad_index, "index"), "levels/1/lists/same/index");
+
+  ModelTrace bad_kept = make_trace(false);
+  bad_kept.levels[1].kept[2] = 6;
+  EXPECT_EQ(read_back_error(bad_kept, "kept"), "levels/1/kept");
+
+  ModelTrace bad_query = make_trace(false);
+  bad_query.queries[0].query_index = 3;
+  EXPECT_EQ(read_back_error(bad_query, "query"), "queries/0/@query_index");
+
+  ModelTrace bad_level = make_trace(false);
+  bad_level.features[1].level = 2;
+  EXPECT_EQ(read_back_error(bad_level, "level"), "features/encoder.0");
+
+  EXPECT_EQ(read_back_error(make_trace(true), "good"), "");
+}
+
+TEST(TraceFileTest, TraceMustMatchTheSceneItIsUsedWith) {
+  Scene scene;
+  scene.dt_s = 0.1;
+  Object o;
+  o.id = 4;
+  o.mesh.vertices.resize(3, 3);
+  o.mesh.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  o.mesh.faces.resize(1, 3);
+  o.mesh.faces << 0, 1, 2;
+  scene.objects = {o};
+  scene.trajectories.resize(1);
+  scene.trajectories[0].poses.assign(6, Pose{});
+  ModelTrace t = make_trace(false);
+  t.levels[0].points = Points::Constant(6, 3, 0.25);
+  EXPECT_NO_THROW(check_trace_matches_scene(t, scene, "t.h5"));
+
+  ModelTrace far = t;
+  far.levels[0].points(2, 0) = 5.0;  // nowhere near the triangle
+  EXPECT_THROW(check_trace_matches_scene(far, scene, "t.h5"), FormatError);
+
+  ModelTrace other_object = t;
+  other_object.levels[0].object_ids[1] = 9;
+  EXPECT_THROW(check_trace_matches_scene(other_object, scene, "t.h5"), FormatError);
+
+  ModelTrace late = t;
+  late.frame = 6;  // the scene has frames 0..5
+  EXPECT_THROW(check_trace_matches_scene(late, scene, "t.h5"), FormatError);
 }
 
 }  // namespace

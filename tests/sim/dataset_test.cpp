@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -77,7 +78,7 @@ TEST(Dataset, FileNamesAndSplit) {
   EXPECT_EQ(scene_file_name("drop", 12345), "drop_12345.h5");
   int train = 0, val = 0, test = 0;
   for (int i = 0; i < 100; ++i) {
-    const std::string s = split_of(i);
+    const std::string s = split_of(i, 100);
     train += s == "train";
     val += s == "val";
     test += s == "test";
@@ -85,6 +86,49 @@ TEST(Dataset, FileNamesAndSplit) {
   EXPECT_EQ(train, 80);
   EXPECT_EQ(val, 10);
   EXPECT_EQ(test, 10);
+}
+
+TEST(Dataset, EverySplitHasAScene) {
+  for (int64_t count = 1; count <= 40; ++count) {
+    std::map<std::string, int> sizes;
+    for (int64_t i = 0; i < count; ++i) ++sizes[split_of(i, count)];
+    EXPECT_EQ(sizes["train"] + sizes["val"] + sizes["test"], count);
+    EXPECT_GE(sizes["train"], 1) << count << " scenes";
+    if (count >= 3) {
+      EXPECT_GE(sizes["val"], 1) << count << " scenes";
+      EXPECT_GE(sizes["test"], 1) << count << " scenes";
+    } else {
+      EXPECT_EQ(sizes["train"], count);
+    }
+  }
+  // Three scenes: one of each.
+  EXPECT_EQ(split_of(0, 3), "train");
+  EXPECT_EQ(split_of(1, 3), "val");
+  EXPECT_EQ(split_of(2, 3), "test");
+}
+
+TEST(Dataset, CountAndJobsOutOfRangeNameTheRange) {
+  DatasetOptions options;
+  options.scenario = "drop";
+  options.out_dir = "unused";
+  options.count = kMaxDatasetCount + 1;
+  try {
+    check_dataset_options(options);
+    ADD_FAILURE() << "a count above the bound was accepted";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("count: must be an integer in [1, "), std::string::npos)
+        << e.what();
+  }
+  options.count = 1;
+  options.jobs = 100000;
+  try {
+    check_dataset_options(options);
+    ADD_FAILURE() << "100000 jobs were accepted";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("jobs: must be an integer in [1, 1024], got 100000"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Dataset, WritesScenesAndManifest) {

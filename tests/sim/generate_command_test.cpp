@@ -61,8 +61,10 @@ TEST_F(GenerateCommand, BadArgumentsGiveOneClearErrorAndNonZeroExit) {
   std::fclose(f);
   const Case cases[] = {
       {"generate --scenario warp --count 2 --out " + out, "unknown scenario 'warp' (known: movi-a"},
-      {"generate --scenario drop --count 0 --out " + out, "count: must be at least 1, got 0"},
-      {"generate --scenario drop --count 2 --jobs 0 --out " + out, "jobs: must be at least 1"},
+      {"generate --scenario drop --count 0 --out " + out,
+       "count: must be an integer in [1, 10000000], got 0"},
+      {"generate --scenario drop --count 2 --jobs 0 --out " + out,
+       "jobs: must be an integer in [1, 1024], got 0"},
       {"generate --scenario drop --count 2 --out " + (dir_ / "plain_file" / "x").string(),
        "cannot create output directory"},
   };

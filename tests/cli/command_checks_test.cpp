@@ -1,0 +1,138 @@
+// Tests of the commands' checks: options outside their range and outputs that would overwrite an
+// input are refused with one line naming the option and the accepted range, before any work.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/support/run_command.h"
+
+namespace dynscope {
+namespace {
+
+namespace fs = std::filesystem;
+using test::run_dynscope;
+
+const std::string kSource = DYNSCOPE_SOURCE_DIR;
+const std::string kScene = kSource + "/assets/scenes/movi-a_0000.h5";
+const std::string kCheckpoint = kSource + "/assets/models/movi-a_pointconv_acc.pt";
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A scratch directory holding copies of the bundled scene and checkpoint.
+class CommandChecks : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    dir_ = fs::temp_directory_path() /
+           ("dynscope-checks-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
+    fs::create_directories(dir_);
+    scene_ = (dir_ / "scene.h5").string();
+    checkpoint_ = (dir_ / "model.pt").string();
+    fs::copy_file(kScene, scene_);
+    fs::copy_file(kCheckpoint, checkpoint_);
+    scene_bytes_ = read_bytes(scene_);
+    checkpoint_bytes_ = read_bytes(checkpoint_);
+  }
+  void TearDown() override {
+    EXPECT_EQ(read_bytes(scene_), scene_bytes_) << "the scene input was modified";
+    EXPECT_EQ(read_bytes(checkpoint_), checkpoint_bytes_) << "the checkpoint input was modified";
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  // Runs `args`, expects a failure whose one-line message holds every part of `parts`.
+  void expect_refused(const std::string& args, std::initializer_list<std::string> parts) {
+    const auto r = run_dynscope(args);
+    EXPECT_NE(r.exit_code, 0) << args << "\n" << r.output;
+    EXPECT_NE(r.exit_code, -1) << args << " was killed by a signal";
+    for (const std::string& part : parts) {
+      EXPECT_NE(r.output.find(part), std::string::npos)
+          << "'" << part << "' not in the output of " << args << ":\n"
+          << r.output;
+    }
+    const std::string text = r.output.substr(0, r.output.find_last_not_of('\n') + 1);
+    EXPECT_EQ(text.find('\n'), std::string::npos) << args << ": not one line:\n" << r.output;
+  }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+  std::string scene_, checkpoint_, scene_bytes_, checkpoint_bytes_;
+};
+
+TEST_F(CommandChecks, OutputsThatWouldOverwriteAnInputAreRefused) {
+  const std::string rollout = "rollout --checkpoint " + checkpoint_ + " --scene " + scene_;
+  expect_refused(rollout + " --out " + scene_, {"--out", "--scene", "destroy"});
+  expect_refused(rollout + " --out " + checkpoint_, {"--out", "--checkpoint"});
+  // The same file under another name: a symbolic link and a path with "..".
+  fs::create_symlink(scene_, path("link.h5"));
+  expect_refused(rollout + " --out " + path("link.h5"), {"--out", "--scene"});
+  fs::create_directories(path("sub"));
+  expect_refused(rollout + " --out " + path("sub/../scene.h5"), {"--out", "--scene"});
+  expect_refused("trace --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + scene_,
+                 {"--out", "--scene"});
+  expect_refused("view " + scene_ + " --screenshot " + scene_, {"--screenshot", "file"});
+  // A dataset directory: the bundled movi-a manifest and its scenes.
+  fs::create_directories(path("data"));
+  fs::copy_file(kSource + "/assets/scenes/movi-a_manifest.json", path("data/manifest.json"));
+  for (const char* scene : {"movi-a_0000.h5", "movi-a_0001.h5"}) {
+    fs::copy_file(kSource + "/assets/scenes/" + scene, path(std::string("data/") + scene));
+  }
+  const std::string eval =
+      "eval --checkpoint " + checkpoint_ + " --data " + path("data") + " --split all --json ";
+  expect_refused(eval + checkpoint_, {"--json", "--checkpoint"});
+  expect_refused(eval + path("data/manifest.json"), {"--json", "dataset manifest"});
+  expect_refused(eval + path("data/movi-a_0001.h5"), {"--json", "dataset scene"});
+}
+
+TEST_F(CommandChecks, RenderRefusesAnInputInsideItsOutputUnderAnOutputName) {
+  fs::create_directories(path("out"));
+  for (const char* name : {"frame_0000.png", "view.json", "contact_sheet.png"}) {
+    const std::string input = path(std::string("out/") + name);
+    fs::copy_file(scene_, input, fs::copy_options::overwrite_existing);
+    const std::string before = read_bytes(input);
+    expect_refused("render " + input + " --out " + path("out") + " --no-video",
+                   {"--out", "output directory"});
+    EXPECT_EQ(read_bytes(input), before) << name;
+  }
+  expect_refused("render " + scene_ + " --out " + scene_, {"--out", "input"});
+}
+
+TEST_F(CommandChecks, OptionsOutsideTheirRangeNameTheRange) {
+  const std::string rollout =
+      "rollout --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + path("r.h5");
+  expect_refused(rollout + " --voxel 0", {"--voxel", "(0, "});
+  expect_refused(rollout + " --voxel -0.3", {"--voxel", "got -0.3"});
+  expect_refused(rollout + " --voxel nan", {"--voxel"});
+  expect_refused(rollout + " --frames -1", {"--frames", "[0, 1000000]"});
+  expect_refused(rollout + " --threads 100000", {"--threads", "[0, 1024]"});
+  expect_refused(rollout + " --observed 2", {"--observed", "[3, "});
+  EXPECT_FALSE(fs::exists(path("r.h5")));
+
+  const std::string render = "render " + scene_ + " --out " + path("frames") + " --no-video";
+  expect_refused(render + " --level -1", {"--level", "[0, 7]"});
+  expect_refused(render + " --level 99", {"--level", "got 99"});
+  expect_refused(render + " --pick -2", {"--pick", "[0, "});
+  expect_refused(render + " --samples -1", {"--samples", "[0, 64]"});
+  EXPECT_FALSE(fs::exists(path("frames")));
+
+  expect_refused("trace --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " +
+                     path("t.h5") + " --query 3,-2",
+                 {"--query", "-2"});
+  expect_refused("generate --scenario drop --count 0 --out " + path("gen"), {"count", "[1, "});
+  expect_refused("generate --scenario drop --count 2 --jobs 100000 --out " + path("gen"),
+                 {"jobs", "[1, 1024]"});
+}
+
+}  // namespace
+}  // namespace dynscope
