@@ -235,7 +235,12 @@ std::vector<Mutation> json_mutations(const std::string& path) {
   for (const json::json_pointer& p : pointers) {
     out.push_back({p.to_string() + " deleted", [doc, p](const std::string& file) {
                      json j = doc;
-                     j.at(p.parent_pointer()).erase(p.back());
+                     json& parent = j.at(p.parent_pointer());
+                     if (parent.is_array()) {
+                       parent.erase(static_cast<size_t>(std::stoul(p.back())));
+                     } else {
+                       parent.erase(p.back());
+                     }
                      write_bytes(file, j.dump(2));
                    }});
     if (!doc.at(p).is_primitive()) continue;
