@@ -1,14 +1,11 @@
-// System context read from the running process: dladdr on sgemm_, /proc/self/maps, OpenMP.
+// System context read from the running process: dladdr on sgemm_, OpenMP, the CPU affinity.
 #include "engine/core/system_info.h"
 
 #include <dlfcn.h>
 #include <omp.h>
 
-#include <algorithm>
 #include <climits>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 
 #include "engine/core/threads.h"
 
@@ -21,24 +18,6 @@ std::string real_path(const std::string& path) {
 }
 
 }  // namespace
-
-std::vector<std::string> mapped_libraries(const std::string& fragment) {
-  std::vector<std::string> out;
-  std::ifstream maps("/proc/self/maps");
-  std::string line;
-  while (std::getline(maps, line)) {
-    const size_t slash = line.find('/');
-    if (slash == std::string::npos) continue;
-    const std::string path = line.substr(slash);
-    const std::string name = path.substr(path.rfind('/') + 1);
-    if (name.find(".so") == std::string::npos || name.find(fragment) == std::string::npos) {
-      continue;
-    }
-    const std::string real = real_path(path);
-    if (std::find(out.begin(), out.end(), real) == out.end()) out.push_back(real);
-  }
-  return out;
-}
 
 BlasInfo blas_info() {
   BlasInfo info;

@@ -1,4 +1,4 @@
-// What this process runs on: the BLAS library it mapped, thread counts, cores (no torch, no GL).
+// What this process runs on: the BLAS library serving it, thread counts, cores (no torch, no GL).
 #pragma once
 
 #include <string>
@@ -18,10 +18,6 @@ struct BlasInfo {
 
 /// Looks up sgemm_ in the process and names the mapped file that defines it.
 BlasInfo blas_info();
-
-/// Real paths of every mapped shared library whose file name contains `fragment`, from
-/// /proc/self/maps, each once, in mapping order.
-std::vector<std::string> mapped_libraries(const std::string& fragment);
 
 /// Key/value lines describing the machine and this process's compute setup (cores, compute
 /// threads, OpenMP threads, BLAS library and threads, a warning line for the reference BLAS).
