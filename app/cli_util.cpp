@@ -60,14 +60,6 @@ void require_int_in_range(const std::string& name, int64_t v, int64_t lo, int64_
                              ", got " + std::to_string(v));
 }
 
-void require_image_size(const std::string& option, int width, int height) {
-  const int64_t pixels = int64_t{width} * height;
-  if (width >= 1 && height >= 1 && pixels <= kMaxImagePixels) return;
-  throw ValueError(option, "must be at least 1x1 and at most " + std::to_string(kMaxImagePixels) +
-                               " pixels (e.g. 4096x4096), got " + std::to_string(width) + "x" +
-                               std::to_string(height));
-}
-
 CLI::Validator unsigned_integer() {
   return CLI::Validator(
       [](std::string& value) -> std::string {
@@ -150,7 +142,8 @@ ModelTrace capture_checkpoint_trace(const std::string& checkpoint, const Scene& 
                                     int picked) {
   require_readable_file(checkpoint);
   const CheckpointInfo info = read_checkpoint_info(checkpoint);
-  const ModelPoints points = build_model_points(scene, checkpoint_sampling(checkpoint, info.config));
+  const ModelPoints points =
+      build_model_points(scene, checkpoint_sampling(checkpoint, info.config));
   ModelTrace trace = capture_trace(checkpoint, scene, points, frame, {});
   if (picked >= 0) {
     const int query = trace_level0_point(trace, level, picked);

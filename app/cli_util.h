@@ -35,13 +35,6 @@ constexpr int64_t kMaxFrameOption = 1000000;
 /// Largest voxel edge an option accepts, in scene units.
 constexpr double kMaxVoxelOption = 1e6;
 
-/// Largest image a command renders, in pixels (4096 x 4096): a bigger framebuffer, multisampled,
-/// needs gigabytes.
-constexpr int64_t kMaxImagePixels = int64_t{4096} * 4096;
-
-/// Throws ValueError(`option`, ...) if `width` x `height` exceeds kMaxImagePixels.
-void require_image_size(const std::string& option, int width, int height);
-
 /// CLI11 check for an unsigned option (seeds): CLI11 turns "-1" into 2^64 - 1, so a sign or
 /// anything but decimal digits is refused with the accepted range.
 CLI::Validator unsigned_integer();

@@ -147,7 +147,6 @@ void add_render_command(CLI::App& app) {
     }
     if (!size->empty()) {
       const auto [w, h] = render::parse_image_size(*size);
-      require_image_size("--size", w, h);
       options->width = w;
       options->height = h;
     }

@@ -4,12 +4,12 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
+#include "app/viewer/engine_model_services.h"
 #include "app/viewer/glfw_platform.h"
 #include "app/viewer/model_services.h"
 #include "app/viewer/null_platform.h"
@@ -17,12 +17,10 @@
 #include "app/viewer/viewer_app.h"
 #include "engine/core/error.h"
 #include "engine/io/temp_file.h"
-#include "engine/rollout/model_points.h"
-#include "engine/rollout/model_predictor.h"
-#include "engine/train/train_options.h"
 #include "render/batch_render.h"
 #include "render/context_factory.h"
 #include "render/glfw_context.h"
+#include "render/image.h"
 
 namespace dynscope::app {
 namespace {
@@ -39,52 +37,6 @@ struct ViewOptions {
   std::string screenshot;
   std::string size;
   int warmup_frames = 3;
-};
-
-// The viewer's model: a checkpoint loaded once (the viewer's ModelCache keeps one per checkpoint)
-// and run through the engine's LibTorch code, one call at a time per model.
-class EngineCheckpoint : public viewer::LoadedCheckpoint {
- public:
-  explicit EngineCheckpoint(const std::string& path)
-      : path(path), model(load_model(path)), sampling(checkpoint_sampling(path, model.config)) {}
-  std::string path;
-  LoadedModel model;
-  SamplingOptions sampling;
-  std::mutex mutex;
-};
-
-class EngineModelServices : public viewer::ModelServices {
- public:
-  std::shared_ptr<viewer::LoadedCheckpoint> load(const std::string& checkpoint) override {
-    require_readable_file(checkpoint);
-    return std::make_shared<EngineCheckpoint>(checkpoint);
-  }
-  Rollout rollout(viewer::LoadedCheckpoint& loaded, const viewer::RolloutRequest& request,
-                  viewer::JobControl& control) override {
-    auto& c = static_cast<EngineCheckpoint&>(loaded);
-    std::lock_guard<std::mutex> lock(c.mutex);
-    RolloutOptions options;
-    options.observed_frames = request.observed_frames;
-    const ModelPoints points = build_model_points(request.scene, c.sampling);
-    // Cancellation is polled before every model step.
-    const StepPredictor predict = [&c, &control](const PointState& state) {
-      control.check();
-      return c.model.predict(state);
-    };
-    Rollout r = run_rollout(request.scene, points, predict, options, control.progress());
-    r.scene_path = request.scene_path;
-    r.checkpoint_path = c.path;
-    r.model_config = c.model.config_json;
-    return r;
-  }
-  ModelTrace trace(viewer::LoadedCheckpoint& loaded, const viewer::TraceRequest& request,
-                   viewer::JobControl& control) override {
-    auto& c = static_cast<EngineCheckpoint&>(loaded);
-    std::lock_guard<std::mutex> lock(c.mutex);
-    control.check();
-    return capture_checkpoint_trace(c.path, *request.scene, request.scene_path, request.frame,
-                                    request.level, request.picked);
-  }
 };
 
 void load_inputs(viewer::ViewerApp& app, const ViewOptions& o) {
@@ -105,7 +57,7 @@ void run_headless(const ViewOptions& o, int width, int height) {
   auto context = render::create_context("osmesa", width, height);
   viewer::ImGuiSession session;
   viewer::NullPlatform platform(width, height);
-  EngineModelServices services;
+  viewer::EngineModelServices services;
   viewer::ViewerApp app(*context, platform, &services);
   load_inputs(app, o);
   // ImGui lays windows out over the first frames (auto-sized tables, popups); draw a few, and
@@ -134,7 +86,7 @@ void run_window(const ViewOptions& o, int width, int height) {
   }
   viewer::ImGuiSession session;
   viewer::GlfwPlatform platform(*context);
-  EngineModelServices services;
+  viewer::EngineModelServices services;
   viewer::ViewerApp app(*context, platform, &services);
   // A bad file on the command line becomes the viewer's error popup, as it would from the UI.
   try {
@@ -173,7 +125,7 @@ void add_view_command(CLI::App& app) {
   cmd->callback([o] {
     int width = 1280, height = 800;
     if (!o->size.empty()) std::tie(width, height) = render::parse_image_size(o->size);
-    require_image_size("--size", width, height);
+    render::check_image_size("--size", width, height);
     require_int_in_range("--warmup", o->warmup_frames, 0, kMaxWarmupFrames);
     require_distinct_output("--screenshot", o->screenshot,
                             {{"file", o->scene_path},

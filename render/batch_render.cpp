@@ -20,6 +20,7 @@
 #include "engine/io/temp_file.h"
 #include "engine/io/trace_file.h"
 #include "render/contact_sheet.h"
+#include "render/image.h"
 #include "render/png_io.h"
 #include "render/renderer.h"
 #include "render/scene_adapter.h"
@@ -242,9 +243,7 @@ std::pair<int, int> parse_image_size(const std::string& text) {
   if (x == std::string::npos) throw ValueError("--size", "'" + text + "' is not WxH");
   const int w = parse_int(text.substr(0, x), "--size", text);
   const int h = parse_int(text.substr(x + 1), "--size", text);
-  if (w < 1 || h < 1 || w > 16384 || h > 16384) {
-    throw ValueError("--size", "'" + text + "' is outside 1x1 .. 16384x16384");
-  }
+  check_image_size("--size", w, h);
   return {w, h};
 }
 
@@ -320,8 +319,8 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
       }
     }
   }
-  const RolloutRenderData data = make_rollout_render_data(
-      std::move(rollout), scene ? &*scene : nullptr, view.point_radius);
+  const RolloutRenderData data =
+      make_rollout_render_data(std::move(rollout), scene ? &*scene : nullptr, view.point_radius);
   const int num_frames = data.num_frames();
   auto bounds = [&](int first, int last) {
     Aabb box;
@@ -365,9 +364,9 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
   };
   BatchRenderResult result = render_frames(context, options, view, source);
   if (l.meshes && !data.scene) {
-    result.notes.push_back("meshes skipped: " +
-                           (mesh_note.empty() ? "the scene has fewer frames than the rollout"
-                                              : mesh_note));
+    result.notes.push_back("meshes skipped: " + (mesh_note.empty()
+                                                     ? "the scene has fewer frames than the rollout"
+                                                     : mesh_note));
   }
   return result;
 }

@@ -15,7 +15,7 @@ namespace dynscope::render {
 /// Throws ValueError("--frames", ...) if malformed or empty/out of range.
 std::pair<int, int> parse_frame_range(const std::string& text, int num_frames);
 /// Parses "WxH" (e.g. "1280x720"); throws ValueError("--size", ...) if malformed or out of
-/// 1 .. 16384.
+/// render::kMaxImagePixels (check_image_size).
 std::pair<int, int> parse_image_size(const std::string& text);
 /// Full path of executable `name` found on $PATH, or "" if none.
 std::string find_on_path(const std::string& name);

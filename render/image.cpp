@@ -80,6 +80,18 @@ constexpr int kAdvance = 6;  // 5 columns plus one of spacing
 
 }  // namespace
 
+void check_image_size(const std::string& name, int width, int height) {
+  const int64_t pixels = int64_t{width} * height;
+  if (width >= 1 && height >= 1 && width <= kMaxImageSide && height <= kMaxImageSide &&
+      pixels <= kMaxImagePixels) {
+    return;
+  }
+  throw ValueError(name, "must be at least 1x1, at most " + std::to_string(kMaxImageSide) +
+                             " on a side and " + std::to_string(kMaxImagePixels) +
+                             " pixels (e.g. 4096x4096), got " + std::to_string(width) + "x" +
+                             std::to_string(height));
+}
+
 Image::Image(int w, int h, std::array<uint8_t, 4> fill) : width(w), height(h) {
   if (w < 0 || h < 0) {
     throw ValueError("image size", std::to_string(w) + "x" + std::to_string(h));

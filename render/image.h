@@ -8,6 +8,17 @@
 
 namespace dynscope::render {
 
+/// Largest image dynscope renders, in pixels (4096 x 4096, e.g. 8192 x 2048): a bigger
+/// framebuffer, multisampled, needs gigabytes.
+constexpr int64_t kMaxImagePixels = int64_t{4096} * 4096;
+/// Longest side of an image (GL's viewport and renderbuffer limit on common drivers).
+constexpr int kMaxImageSide = 16384;
+
+/// Throws ValueError(`name`, ...) stating the accepted range unless `width` x `height` is at
+/// least 1 x 1, at most kMaxImageSide on a side and kMaxImagePixels pixels. The one size rule of
+/// every image and context.
+void check_image_size(const std::string& name, int width, int height);
+
 /// 8-bit RGBA image, rows top to bottom, `rgba` holds width*height*4 bytes.
 struct Image {
   int width = 0;

@@ -4,16 +4,12 @@
 #include <GL/osmesa.h>
 
 #include "engine/core/error.h"
+#include "render/image.h"
 
 namespace dynscope::render {
 namespace {
 
-void check_size(int width, int height) {
-  if (width < 1 || height < 1 || width > 16384 || height > 16384) {
-    throw ValueError("image size", std::to_string(width) + "x" + std::to_string(height) +
-                                       " is outside 1x1 .. 16384x16384");
-  }
-}
+void check_size(int width, int height) { check_image_size("image size", width, height); }
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include "engine/core/error.h"
 #include "engine/core/log.h"
 #include "engine/io/temp_file.h"
+#include "render/image.h"
 #include "render/render_scene.h"
 
 namespace dynscope::render {
@@ -108,10 +109,7 @@ std::string reason(const ValueError& e) {
 
 void ViewSpec::validate() const {
   if (frame < 0) throw ValueError("frame", std::to_string(frame) + " < 0");
-  if (width < 1 || height < 1 || width > 16384 || height > 16384) {
-    throw ValueError("image", std::to_string(width) + "x" + std::to_string(height) +
-                                  " is outside 1x1 .. 16384x16384");
-  }
+  check_image_size("image", width, height);
   camera.camera.validate();
   if (!camera.preset.empty()) parse_preset(camera.preset);
   check_colormap(colormap);

@@ -65,7 +65,8 @@ class ModelCache {
  public:
   /// `services` must outlive the cache.
   explicit ModelCache(ModelServices& services) : services_(services) {}
-  /// The loaded model of `checkpoint` (loading it on first use); throws what load throws.
+  /// The loaded model of `checkpoint` (loading it on first use, and again when the file has
+  /// changed on disk since: size or modification time); throws what load throws.
   std::shared_ptr<LoadedCheckpoint> get(const std::string& checkpoint);
   /// Drops every model but those of `keep` (running jobs keep theirs alive).
   void forget_except(const std::set<std::string>& keep);
@@ -78,7 +79,11 @@ class ModelCache {
   ModelServices& services_;
   mutable std::mutex mutex_;
   std::mutex load_mutex_;  ///< One load at a time, so two jobs never load the same file twice.
-  std::map<std::string, std::shared_ptr<LoadedCheckpoint>> models_;
+  struct Entry {
+    std::string stamp;  ///< File size and modification time when loaded ("" if unreadable).
+    std::shared_ptr<LoadedCheckpoint> model;
+  };
+  std::map<std::string, Entry> models_;
   int loads_ = 0;
 };
 

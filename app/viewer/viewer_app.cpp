@@ -59,6 +59,11 @@ bool ViewerApp::pick(int x, int y) {
 void ViewerApp::report(const std::exception& e) {
   error_ = e.what();
   error_pending_ = true;
+  ++error_count_;
+}
+
+void ViewerApp::request_open(const std::string& path) {
+  post([path](ViewerState& s) { s.open_file(path); });
 }
 
 void ViewerApp::handle_input() {
@@ -115,14 +120,11 @@ void ViewerApp::frame() {
   sync_layout();
   platform_.new_frame();
   ImGui::NewFrame();
-  if (!open_request_.empty()) {
-    const std::string path = std::move(open_request_);
-    open_request_.clear();
-    try {
-      state_.open_file(path);
-    } catch (const std::exception& e) {
-      report(e);
-    }
+  if (!posted_.empty()) {
+    Actions posted;
+    posted.list = std::move(posted_);
+    posted_.clear();
+    apply(posted);
   }
   try {
     state_.update_jobs();
@@ -143,6 +145,7 @@ void ViewerApp::frame() {
     state_.select_point(-1);
     report(e);
   }
+  error_popup_open_ = false;
   if (ui_visible_) {
     draw_viewport_captions(ports);
     draw_error_popup();
@@ -274,7 +277,8 @@ void ViewerApp::draw_error_popup() {
   ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f, io.DisplaySize.y * 0.5f),
                           ImGuiCond_Always, ImVec2(0.5f, 0.5f));
   ImGui::SetNextWindowSize(ImVec2(std::min(520.0f, io.DisplaySize.x - 20.0f), 0));
-  if (ImGui::BeginPopupModal("Error", nullptr, ImGuiWindowFlags_NoMove)) {
+  error_popup_open_ = ImGui::BeginPopupModal("Error", nullptr, ImGuiWindowFlags_NoMove);
+  if (error_popup_open_) {
     ImGui::TextWrapped("%s", error_.c_str());
     if (ImGui::Button("OK", ImVec2(80, 0))) ImGui::CloseCurrentPopup();
     ImGui::EndPopup();

@@ -46,15 +46,22 @@ class ViewerApp {
   /// Picks the point drawn at pixel (x, y) (origin top-left) as a click would; returns whether a
   /// point was hit.
   bool pick(int x, int y);
+  /// Runs `action` on the state during the next frame, before the panels, as a panel's button
+  /// would: a failure becomes the error popup.
+  void post(Action action) { posted_.push_back(std::move(action)); }
   /// Opens `path` (ViewerState::open_file) during the next frame, as the Files panel's Open
   /// button does: failures become the error popup.
-  void request_open(const std::string& path) { open_request_ = path; }
+  void request_open(const std::string& path);
   /// Requests a PNG of the next frame (UI included) written atomically to `path`.
   void request_screenshot(const std::string& path) { screenshot_path_ = path; }
   /// Hides (false) or shows the panels; without them frames show only the 3D view.
   void set_ui_visible(bool visible);
   /// Message of the last error shown in the popup ("" if none).
   const std::string& last_error() const { return error_; }
+  /// Errors reported so far (each opens the popup).
+  int error_count() const { return error_count_; }
+  /// Whether the last frame drew the error popup.
+  bool error_popup_open() const { return error_popup_open_; }
   /// Renderer uploads so far (scrubbing must add none).
   int64_t upload_count() const { return renderer_.upload_count(); }
 
@@ -79,8 +86,10 @@ class ViewerApp {
   bool ui_visible_ = true;
   std::string error_;
   bool error_pending_ = false;
+  int error_count_ = 0;
+  bool error_popup_open_ = false;
   std::string screenshot_path_;
-  std::string open_request_;
+  std::vector<Action> posted_;
   // Mouse drag in the 3D view: press position and whether it moved (a click picks).
   bool dragging_ = false;
   float drag_distance_ = 0.0f;

@@ -407,10 +407,9 @@ void ViewerState::open_trace(const std::string& path) {
     }
     open_scene(trace->scene_path);
   }
-  if (trace->frame < 0 || trace->frame >= doc_->scene.num_frames()) {
-    throw FormatError(path, "frame",
-                      std::to_string(trace->frame) + " is not a frame of " + doc_->path);
-  }
+  // A trace of another scene (or of another frame's objects) would draw neighbourhoods the
+  // model never saw on this scene.
+  check_trace_matches_scene(*trace, doc_->scene, path);
   replaced();
   checkpoint_.clear();
   const int level = std::min(view_.level, static_cast<int>(trace->levels.size()) - 1);

@@ -7,11 +7,13 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include "engine/core/error.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/trace_file.h"
 #include "engine/model/model_config.h"
 #include "engine/rollout/rollout_runner.h"
 #include "fake_model.h"
@@ -207,6 +209,52 @@ TEST(ViewerState, OneLoadedModelPerCheckpointAcrossJobs) {
   settle(s);
   EXPECT_EQ(model.loads(), 3);
   EXPECT_LE(s.model_cache()->size(), 2u);
+}
+
+// A checkpoint rewritten in place (a training run continued) is loaded again; an unchanged one is
+// not.
+TEST(ViewerState, ACheckpointRewrittenOnDiskIsLoadedAgain) {
+  const fs::path dir = fs::temp_directory_path() / "dynscope_viewer_state_test";
+  fs::create_directories(dir);
+  const std::string checkpoint = (dir / "rewritten.pt").string();
+  { std::ofstream(checkpoint) << "first"; }
+  FakeModel model;
+  ModelCache cache(model);
+  const auto first = cache.get(checkpoint);
+  EXPECT_EQ(cache.get(checkpoint), first);
+  EXPECT_EQ(model.loads(), 1);
+  { std::ofstream(checkpoint) << "second, longer"; }
+  EXPECT_NE(cache.get(checkpoint), first);
+  EXPECT_EQ(model.loads(), 2);
+  EXPECT_EQ(cache.size(), 1u);
+}
+
+// A trace file is drawn only on the scene it was captured on: on another scene its neighbourhoods
+// would be ones the model never used there.
+TEST(ViewerState, ATraceOfAnotherSceneIsRefused) {
+  const fs::path dir = fs::temp_directory_path() / "dynscope_viewer_state_test";
+  fs::create_directories(dir);
+  const std::string path = (dir / "collide_trace.h5").string();
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  s.set_checkpoint("a.pt");
+  s.set_frame(5);
+  settle(s);
+  ASSERT_NE(s.held_trace(), nullptr);
+  write_trace(*s.held_trace(), path);
+  s.open_scene(other_scene());
+  try {
+    s.open_trace(path);
+    FAIL() << "a trace of the collide scene was drawn on another scene";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("collide_trace.h5"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(s.document().path, other_scene());
+  EXPECT_FALSE(s.trace_from_file());
+  s.open_scene(testing::collide_scene());
+  EXPECT_NO_THROW(s.open_trace(path));
+  EXPECT_TRUE(s.trace_from_file());
 }
 
 // Level count and observed frames are the engine's (the model config, the rollout defaults), not

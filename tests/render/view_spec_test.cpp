@@ -92,6 +92,10 @@ TEST(ViewSpec, BadInputNamesFileAndKey) {
   expect_format_error(R"({"camera": {"target": [1, 2]}})", "camera.target");
   expect_format_error(R"({"camera": {"preset": "bottom"}})", "camera.preset");
   expect_format_error(R"({"image": {"width": 0}})", "image");
+  // The same pixel ceiling as --size: 16384 x 16384 once passed and asked for a 1 GiB buffer.
+  expect_format_error(R"({"image": {"width": 16384, "height": 16384}})", "image");
+  EXPECT_NO_THROW(view_spec_from_json(
+      nlohmann::json::parse(R"({"image": {"width": 8192, "height": 2048}})"), "v.json"));
   expect_format_error(R"({"colormap": {"name": "jet"}})", "colormap");
   expect_format_error(R"({"colormap": {"range": [1, 0]}})", "colormap.range");
   expect_format_error(R"({"layers": {"grid": "yes"}})", "layers.grid");
