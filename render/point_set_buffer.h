@@ -35,8 +35,9 @@ class PointSetBuffer {
   void draw_sprites(int frame) const;
 
  private:
-  /// Binds frame `frame`'s attribute offsets; false when there is nothing to draw.
-  bool bind(int frame) const;
+  /// Binds frame `frame`'s attribute offsets, advanced per instance (divisor 1) or per vertex
+  /// (0); false when there is nothing to draw.
+  bool bind(int frame, GLuint divisor) const;
 
   const GlFunctions& gl_;
   int num_frames_ = 0;

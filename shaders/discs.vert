@@ -1,7 +1,7 @@
 #version 330 core
-// Flat discs for large clouds: one point sprite per point (instanced, 1 vertex each), sized to the
-// projected sphere diameter; discs.frag cuts the square to a round, lightly shaded disc.
-layout(location = 0) in vec3 a_center;  // world position, one per instance
+// Flat discs for large clouds: one point sprite per point (one vertex each, one plain draw), sized
+// to the projected sphere diameter; discs.frag cuts the square to a round, lightly shaded disc.
+layout(location = 0) in vec3 a_center;  // world position, one per vertex
 layout(location = 1) in vec3 a_color;   // per-point colour (u_color_mode 1)
 layout(location = 2) in float a_scalar; // per-point scalar (u_color_mode 2)
 
@@ -23,7 +23,7 @@ void main() {
   // Projected diameter in pixels: proj[1][1] is cot(fov/2); the disc faces the camera.
   float diameter = 2.0 * u_radius * u_proj[1][1] * 0.5 * u_viewport_height / max(-center.z, 1e-6);
   gl_PointSize = clamp(diameter, 1.0, 255.0);
-  v_index = gl_InstanceID;
+  v_index = gl_VertexID;
   if (u_color_mode == 1) {
     v_color = a_color;
   } else if (u_color_mode == 2) {

@@ -5,6 +5,7 @@
 
 #include "app/viewer/panel_util.h"
 #include "app/viewer/panels.h"
+#include "app/viewer/viewports.h"
 
 namespace dynscope::app::viewer {
 namespace {

@@ -9,6 +9,7 @@
 
 #include "app/viewer/panel_util.h"
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
 #include "render/png_io.h"
 
 namespace dynscope::app::viewer {
@@ -116,6 +117,7 @@ void ViewerApp::apply(Actions& actions) {
 }
 
 void ViewerApp::frame() {
+  const double start = thread_cpu_ms();
   context_.make_current();
   sync_layout();
   platform_.new_frame();
@@ -151,8 +153,10 @@ void ViewerApp::frame() {
     draw_error_popup();
   }
   ImGui::Render();
+  const double gl_start = thread_cpu_ms();
   render_view(ports);
   if (ui_visible_) imgui_.render(ImGui::GetDrawData());
+  double gl = thread_cpu_ms() - gl_start;
   if (!screenshot_path_.empty()) {
     try {
       render::write_png(screenshot_path_, context_.read_pixels());
@@ -161,7 +165,11 @@ void ViewerApp::frame() {
     }
     screenshot_path_.clear();
   }
+  const double swap_start = thread_cpu_ms();
   context_.swap_buffers();
+  const double end = thread_cpu_ms();
+  gl += end - swap_start;
+  frame_cpu_ = {end - start, gl};
 }
 
 void ViewerApp::render_view(const std::vector<Viewport>& ports) {

@@ -18,6 +18,15 @@
 
 namespace dynscope::app::viewer {
 
+/// CPU time of the UI thread in the last frame(), in milliseconds: all of it, and the part spent
+/// inside GL calls (drawing, UI submission, read-back, swap). With a software driver (llvmpipe)
+/// the vertex stage runs inside those calls on this thread; with a GPU driver it does not.
+struct FrameCpu {
+  double total_ms = 0.0;
+  double gl_ms = 0.0;
+  double app_ms() const { return total_ms - gl_ms; }  ///< State, panels, ImGui, viewports.
+};
+
 /// The viewer: a ViewerState, the panels that draw it and return actions, the Renderer for the
 /// 3D view and the ImGuiRenderer for the panels. The 3D view fills the framebuffer behind the
 /// panels, so picking and Camera::project use full-window pixels. Errors from user actions are
@@ -62,6 +71,8 @@ class ViewerApp {
   int error_count() const { return error_count_; }
   /// Whether the last frame drew the error popup.
   bool error_popup_open() const { return error_popup_open_; }
+  /// Where the last frame's UI-thread CPU went.
+  const FrameCpu& frame_cpu() const { return frame_cpu_; }
   /// Renderer uploads so far (scrubbing must add none).
   int64_t upload_count() const { return renderer_.upload_count(); }
 
@@ -90,6 +101,7 @@ class ViewerApp {
   bool error_popup_open_ = false;
   std::string screenshot_path_;
   std::vector<Action> posted_;
+  FrameCpu frame_cpu_;
   // Mouse drag in the 3D view: press position and whether it moved (a click picks).
   bool dragging_ = false;
   float drag_distance_ = 0.0f;

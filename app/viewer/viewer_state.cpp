@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "app/viewer/viewports.h"
 #include "engine/core/error.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
@@ -16,10 +17,6 @@
 
 namespace dynscope::app::viewer {
 namespace {
-
-constexpr float kPanelWidth = 370.0f;
-constexpr float kTimelineHeight = 58.0f;
-constexpr float kErrorStripHeight = 64.0f;  // added under the timeline while a rollout is shown
 
 std::string file_name(const std::string& path) {
   const size_t slash = path.find_last_of('/');
@@ -35,29 +32,6 @@ std::optional<Scene> rollout_scene(const Rollout& rollout, const std::string& ro
 }
 
 }  // namespace
-
-const char* pick_set_name(PickSet set) {
-  switch (set) {
-    case PickSet::kLevel:
-      return "level points";
-    case PickSet::kPrediction:
-      return "prediction";
-    case PickSet::kTruth:
-      return "truth";
-    case PickSet::kCompared:
-      return "compared prediction";
-    case PickSet::kNone:
-      break;
-  }
-  return "";
-}
-
-float panel_width(const WindowLayout& layout) { return layout.ui_visible ? kPanelWidth : 0.0f; }
-
-float timeline_height(const WindowLayout& layout, bool has_rollout) {
-  if (!layout.ui_visible) return 0.0f;
-  return kTimelineHeight + (has_rollout ? kErrorStripHeight : 0.0f);
-}
 
 ViewerState::ViewerState(ModelServices* services) : services_(services) {
   if (services_) cache_ = std::make_shared<ModelCache>(*services_);
@@ -134,48 +108,6 @@ void ViewerState::set_scene(const Scene& scene, const std::string& path) {
   timeline_ = Timeline{};
   view_.camera.fit = true;
   fit_camera();
-}
-
-void ViewerState::set_view(const render::ViewSpec& view) {
-  view.validate();
-  if (num_frames() > 0 && view.frame >= num_frames()) {
-    throw ValueError("frame", std::to_string(view.frame) + " is outside the " +
-                                  std::to_string(num_frames()) + " frames shown");
-  }
-  const render::ViewSpec previous = view_;
-  view_ = view;
-  // Voxel, radius or point size may differ: rebuild the level data from scratch.
-  data_level_ = -1;
-  try {
-    ensure_render_data();
-    if (doc_ && view_.picked_point >= doc_->data->level_size()) {
-      throw ValueError("picked_point",
-                       std::to_string(view_.picked_point) + " is outside the level's points");
-    }
-  } catch (...) {
-    view_ = previous;
-    data_level_ = -1;
-    ensure_render_data();
-    throw;
-  }
-  if (view_.camera.fit) fit_camera();
-  if (view_.picked_point >= 0) show_panel(Panel::kInspector);
-  if (view_.level > 0 || view_.layers.voxels) show_panel(Panel::kLevels);
-}
-
-void ViewerState::open_view(const std::string& path) { set_view(render::load_view_spec(path)); }
-
-render::ViewSpec ViewerState::current_view() const {
-  render::ViewSpec v = view_;
-  v.width = layout_.width;
-  v.height = layout_.height;
-  v.camera.fit = false;
-  v.camera.preset.clear();
-  return v;
-}
-
-void ViewerState::save_view(const std::string& path) const {
-  render::save_view_spec(current_view(), path);
 }
 
 int ViewerState::num_frames() const {
@@ -286,17 +218,6 @@ void ViewerState::set_level(int level) {
   view_.level = level;
   view_.picked_point = -1;  // indices of another level's points mean nothing here
   ensure_render_data();
-}
-
-void ViewerState::set_point_style(const std::string& style) {
-  render::parse_point_style(style);
-  view_.point_style = style;
-}
-
-void ViewerState::set_error_range(bool automatic, float lo, float hi) {
-  view_.auto_range = automatic;
-  view_.range_min = lo;
-  view_.range_max = std::max(hi, lo + 1e-6f);
 }
 
 void ViewerState::open_file(const std::string& path) {
@@ -578,56 +499,6 @@ void ViewerState::ensure_render_data() {
   build.frame = 0;
   doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
   data_level_ = view_.level;
-}
-
-void ViewerState::fit_camera(const std::string& preset) {
-  if (!preset.empty()) view_.camera.preset = preset;
-  if (!doc_ && !rollout_) return;
-  render::Camera& camera = view_.camera.camera;
-  if (!view_.camera.preset.empty()) camera.set_preset(render::parse_preset(view_.camera.preset));
-  const double w = layout_.width, h = std::max(1, layout_.height);
-  // Fit into the part of the window the panels leave free, then shift the view so the scene is
-  // centred there (the 3D view itself spans the whole window, behind the panels).
-  const double left = panel_width(layout_);
-  const double bottom = timeline_height(layout_, rollout_ != nullptr);
-  const bool split = rollout_ && rollout_mode_ == RolloutMode::kSideBySide;
-  const double vw = std::max(1.0, (w - left) / (split ? 2.0 : 1.0)), vh = std::max(1.0, h - bottom);
-  Aabb bounds;
-  if (rollout_) {
-    bounds = rollout_->bounds;
-    if (compare_) bounds.extend(compare_->bounds);
-  } else {
-    bounds = doc_->data->bounds(0, doc_->scene.num_frames() - 1);
-  }
-  camera.fit(bounds, vw / vh);
-  if (!bounds.empty()) {
-    const double radius = std::max(0.5 * (bounds.max - bounds.min).norm(), 1e-3);
-    const double tan_half = std::tan(camera.fov_deg * M_PI / 360.0);
-    const double half = std::min(std::atan(tan_half * vh / h), std::atan(tan_half * vw / h));
-    camera.distance = 1.1 * radius / std::sin(half);
-    camera.pan(-0.5 * left / h, -0.5 * bottom / h);
-  }
-  view_.camera.fit = false;
-  view_.camera.preset.clear();
-}
-
-void ViewerState::advance_playback(float dt_s) {
-  if (num_frames() == 0 || !timeline_.playing) return;
-  const int last = num_frames() - 1;
-  const double frame_s = frame_dt_s();
-  timeline_.accumulated_s += dt_s * timeline_.speed;
-  while (timeline_.accumulated_s >= frame_s) {
-    timeline_.accumulated_s -= frame_s;
-    if (view_.frame < last) {
-      ++view_.frame;
-    } else if (timeline_.loop) {
-      view_.frame = 0;
-    } else {
-      timeline_.playing = false;
-      timeline_.accumulated_s = 0.0;
-      break;
-    }
-  }
 }
 
 }  // namespace dynscope::app::viewer

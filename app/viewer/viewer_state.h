@@ -271,9 +271,4 @@ class ViewerState {
   std::map<Panel, bool> open_requests_;
 };
 
-/// Width of the side panel (pixels; 0 when the UI is hidden).
-float panel_width(const WindowLayout& layout);
-/// Height of the bottom strip (timeline, plus the error strip with a rollout; 0 when hidden).
-float timeline_height(const WindowLayout& layout, bool has_rollout);
-
 }  // namespace dynscope::app::viewer

@@ -2,12 +2,17 @@
 #include "app/viewer/viewports.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "engine/core/error.h"
 #include "render/scene_adapter.h"
 
 namespace dynscope::app::viewer {
 namespace {
+
+constexpr float kPanelWidth = 370.0f;
+constexpr float kTimelineHeight = 58.0f;
+constexpr float kErrorStripHeight = 64.0f;  // added under the timeline while a rollout is shown
 
 // The set a rollout layer draws, told by its series (each document's series are built once).
 PickSet rollout_layer_set(const ViewerState& state, const render::PointLayer& layer) {
@@ -46,6 +51,28 @@ void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
 }
 
 }  // namespace
+
+float panel_width(const WindowLayout& layout) { return layout.ui_visible ? kPanelWidth : 0.0f; }
+
+float timeline_height(const WindowLayout& layout, bool has_rollout) {
+  if (!layout.ui_visible) return 0.0f;
+  return kTimelineHeight + (has_rollout ? kErrorStripHeight : 0.0f);
+}
+
+void fit_camera_to_free_area(render::Camera& camera, const Aabb& bounds, const WindowLayout& layout,
+                             bool has_rollout, bool split) {
+  const double w = layout.width, h = std::max(1, layout.height);
+  const double left = panel_width(layout);
+  const double bottom = timeline_height(layout, has_rollout);
+  const double vw = std::max(1.0, (w - left) / (split ? 2.0 : 1.0)), vh = std::max(1.0, h - bottom);
+  camera.fit(bounds, vw / vh);
+  if (bounds.empty()) return;
+  const double radius = std::max(0.5 * (bounds.max - bounds.min).norm(), 1e-3);
+  const double tan_half = std::tan(camera.fov_deg * M_PI / 360.0);
+  const double half = std::min(std::atan(tan_half * vh / h), std::atan(tan_half * vw / h));
+  camera.distance = 1.1 * radius / std::sin(half);
+  camera.pan(-0.5 * left / h, -0.5 * bottom / h);
+}
 
 render::ViewSpec rollout_view(const ViewerState& state, bool prediction, bool truth, bool ghost) {
   render::ViewSpec v = state.view();

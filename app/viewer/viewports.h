@@ -13,6 +13,16 @@
 
 namespace dynscope::app::viewer {
 
+/// Width of the side panel (pixels; 0 when the UI is hidden).
+float panel_width(const WindowLayout& layout);
+/// Height of the bottom strip (timeline, plus the error strip with a rollout; 0 when hidden).
+float timeline_height(const WindowLayout& layout, bool has_rollout);
+/// Fits `camera` to `bounds` in the part of the window the panels leave free (half of it per
+/// viewport when `split`), then shifts the view so the scene is centred there: the 3D view itself
+/// spans the whole window, behind the panels.
+void fit_camera_to_free_area(render::Camera& camera, const Aabb& bounds, const WindowLayout& layout,
+                             bool has_rollout, bool split);
+
 /// What one viewport of the 3D view draws: `scene` seen by `camera` in `rect` of the window
 /// (side by side: two viewports share one camera, shifted to each one's centre).
 struct Viewport {

@@ -3,6 +3,7 @@
 
 #include <omp.h>
 #include <sched.h>
+#include <time.h>
 
 #include <algorithm>
 #include <atomic>
@@ -38,6 +39,12 @@ void set_compute_threads(int threads) {
   const int n = threads == 0 ? kDefaultComputeThreads : threads;
   g_threads.store(n, std::memory_order_relaxed);
   omp_set_num_threads(n);
+}
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
 }  // namespace dynscope

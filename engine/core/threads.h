@@ -24,4 +24,8 @@ constexpr int kDefaultComputeThreads = 1;
 /// Upper bound of set_compute_threads (a larger count is a typing error, not a machine).
 constexpr int kMaxComputeThreads = 1024;
 
+/// CPU time the calling thread has used, in milliseconds (CLOCK_THREAD_CPUTIME_ID): what a
+/// frame or a step costs its own thread, independent of other processes and worker threads.
+double thread_cpu_ms();
+
 }  // namespace dynscope
