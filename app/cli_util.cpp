@@ -1,6 +1,8 @@
 // Helpers shared by the subcommands.
 #include "app/cli_util.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -100,6 +102,22 @@ bool same_file(const std::string& a, const std::string& b) {
     return e ? absolute : canonical;
   };
   return normal(a) == normal(b);
+}
+
+void require_output_directory(const std::string& option, const std::string& path) {
+  if (path.empty()) return;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  if (!fs::is_directory(dir, ec)) {
+    throw IoError(
+        path, option + ": the directory '" + dir.string() + "' does not exist (create it first)");
+  }
+  if (access(dir.c_str(), W_OK) != 0) {
+    throw IoError(path, option + ": the directory '" + dir.string() + "' is not writable");
+  }
+  if (fs::is_directory(path, ec)) throw IoError(path, option + ": is a directory, not a file");
 }
 
 void require_distinct_output(const std::string& option, const std::string& output,

@@ -53,6 +53,11 @@ using NamedPath = std::pair<std::string, std::string>;
 /// symbolic links included), else the same normalised absolute path.
 bool same_file(const std::string& a, const std::string& b);
 
+/// Throws IoError naming `path` unless the directory a file output goes into exists and is
+/// writable: checked before any work, so a long run never fails at its very end for a typo.
+/// Empty paths are ignored.
+void require_output_directory(const std::string& option, const std::string& path);
+
 /// Throws ValueError(`option`, ...) naming the input if writing `output` would replace one of
 /// `inputs` (same_file); empty paths are ignored. Called before any work, so a command never
 /// destroys what it reads.

@@ -10,8 +10,8 @@
 #include "engine/core/error.h"
 #include "engine/core/progress.h"
 #include "engine/io/temp_file.h"
-#include "engine/rollout/evaluation.h"
 #include "engine/model/torch_runtime.h"
+#include "engine/rollout/evaluation.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
 
@@ -48,6 +48,7 @@ void run_eval(const EvalArgs& args) {
                                    {"checkpoint recipe", recipe_path(args.checkpoint)},
                                    {"dataset manifest", args.data + "/manifest.json"}};
   for (const DatasetItem& item : split.items) inputs.push_back({"dataset scene", item.path});
+  require_output_directory("--json", args.json);
   require_distinct_output("--json", args.json, inputs);
   set_torch_threads(args.threads);
   const LoadedModel model = load_model(args.checkpoint);
@@ -80,7 +81,8 @@ void add_eval_command(CLI::App& app) {
       ->required();
   cmd->add_option("--data", args->data, "Dataset directory (with manifest.json)")->required();
   cmd->add_option("--split", args->split,
-                  "train, val, test, or all (every scene: a held-out dataset generated apart)")->capture_default_str();
+                  "train, val, test, or all (every scene: a held-out dataset generated apart)")
+      ->capture_default_str();
   cmd->add_option("--json", args->json, "Also write every number as JSON to this file");
   cmd->add_option("--observed", args->observed, "Ground-truth frames before prediction (>= 3)")
       ->capture_default_str();

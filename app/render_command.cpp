@@ -107,8 +107,9 @@ void add_render_command(CLI::App& app) {
                   "Frames a:b (a .. b-1), a:, :b or a single frame; negative counts from the end");
   cmd->add_option("--trace", options->trace_path,
                   "Model trace of the scene (`dynscope trace`): draw the model's levels and lists");
-  cmd->add_option("--checkpoint", *checkpoint,
-                  "Trace this checkpoint at the frame (--frames N, default 2) and draw like --trace");
+  cmd->add_option(
+      "--checkpoint", *checkpoint,
+      "Trace this checkpoint at the frame (--frames N, default 2) and draw like --trace");
   auto given = std::make_shared<std::vector<std::string>>();
   auto mark = [given](const char* name) {
     return [given, name](const std::string&) { given->push_back(name); };

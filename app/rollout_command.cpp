@@ -9,9 +9,9 @@
 #include "engine/core/progress.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/rollout/evaluation.h"
 #include "engine/rollout/metrics.h"
-#include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/train/train_options.h"
 
@@ -36,6 +36,7 @@ void run_rollout_command(const RolloutArgs& args) {
   require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);  // before the progress bar starts
   require_readable_file(args.scene);
+  require_output_directory("--out", args.out);
   require_distinct_output("--out", args.out,
                           {{"--scene", args.scene},
                            {"--checkpoint", args.checkpoint},
@@ -48,18 +49,19 @@ void run_rollout_command(const RolloutArgs& args) {
   const int frames = args.frames > 0 ? args.frames : scene.num_frames();
   Progress progress("rollout", std::max(0, frames - args.observed));
   ModelPoints points;
-  const Rollout r =
-      rollout_checkpoint(args.checkpoint, scene, args.scene, options, args.voxel, &progress, &points);
+  const Rollout r = rollout_checkpoint(args.checkpoint, scene, args.scene, options, args.voxel,
+                                       &progress, &points);
   progress.finish();
   // Everything that can fail runs before the file is written: a failed command leaves --out as
   // it was.
   const Rollout baseline = run_baseline_rollout(scene, points, options);
   write_rollout(r, args.out);
-  std::printf("wrote %s: %d frames (%d observed), %lld points\n", args.out.c_str(),
-              r.num_frames(), r.observed_frames, static_cast<long long>(r.num_points()));
-  std::printf("end point error %.4f (mean distance to truth at frame %d, scene units); "
-              "constant-velocity-plus-gravity baseline %.4f\n",
-              r.point_error.back(), r.num_frames() - 1, baseline.point_error.back());
+  std::printf("wrote %s: %d frames (%d observed), %lld points\n", args.out.c_str(), r.num_frames(),
+              r.observed_frames, static_cast<long long>(r.num_points()));
+  std::printf(
+      "end point error %.4f (mean distance to truth at frame %d, scene units); "
+      "constant-velocity-plus-gravity baseline %.4f\n",
+      r.point_error.back(), r.num_frames() - 1, baseline.point_error.back());
   if (r.has_contact()) {
     const double threshold = kContactThresholdFraction * r.sampling_voxel;
     std::printf(

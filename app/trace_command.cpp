@@ -49,6 +49,7 @@ void run_trace(const TraceArgs& args) {
   if (args.voxel_given) require_in_range("--voxel", args.voxel, 0, kMaxVoxelOption, true);
   require_readable_file(args.checkpoint);
   require_readable_file(args.scene);
+  require_output_directory("--out", args.out);
   require_distinct_output("--out", args.out,
                           {{"--scene", args.scene},
                            {"--checkpoint", args.checkpoint},

@@ -1,7 +1,7 @@
 // `dynscope train`: train a dynamics model on a generated dataset (options or a recipe file).
 #include <CLI/CLI.hpp>
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -87,6 +87,7 @@ TrainOptions build_options(const TrainArgs& a) {
   o.resume = a.resume;
   if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory (--data or recipe)");
   if (o.out.empty()) throw ValueError("out", "no checkpoint path (--out or recipe)");
+  require_output_directory("--out", o.out);
   return o;
 }
 

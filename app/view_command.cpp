@@ -127,6 +127,7 @@ void add_view_command(CLI::App& app) {
     if (!o->size.empty()) std::tie(width, height) = render::parse_image_size(o->size);
     render::check_image_size("--size", width, height);
     require_int_in_range("--warmup", o->warmup_frames, 0, kMaxWarmupFrames);
+    require_output_directory("--screenshot", o->screenshot);
     require_distinct_output("--screenshot", o->screenshot,
                             {{"file", o->scene_path},
                              {"--checkpoint", o->checkpoint},

@@ -95,6 +95,27 @@ TEST_F(CommandChecks, OutputsThatWouldOverwriteAnInputAreRefused) {
   expect_refused(eval + path("data/movi-a_0001.h5"), {"--json", "dataset scene"});
 }
 
+// An output into a directory that does not exist is refused before any work (one line, no
+// progress bar), not after a whole rollout or training run.
+TEST_F(CommandChecks, OutputsIntoAMissingDirectoryAreRefusedBeforeAnyWork) {
+  const std::string missing = path("no_such_dir");
+  expect_refused(
+      "rollout --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + missing + "/r.h5",
+      {"--out", "no_such_dir", "does not exist"});
+  expect_refused(
+      "trace --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + missing + "/t.h5",
+      {"--out", "does not exist"});
+  expect_refused("view " + scene_ + " --screenshot " + missing + "/shot.png",
+                 {"--screenshot", "does not exist"});
+  expect_refused("train --recipe " + kCheckpoint + ".recipe.json --data " + path("data") +
+                     " --out " + missing + "/model.pt",
+                 {"--out", "does not exist"});
+  fs::create_directories(path("a_directory.h5"));
+  expect_refused("rollout --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " +
+                     path("a_directory.h5"),
+                 {"--out", "is a directory"});
+}
+
 TEST_F(CommandChecks, RenderRefusesAnInputInsideItsOutputUnderAnOutputName) {
   fs::create_directories(path("out"));
   for (const char* name : {"frame_0000.png", "view.json", "contact_sheet.png"}) {
