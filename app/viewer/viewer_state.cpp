@@ -44,6 +44,7 @@ void ViewerState::replaced() {
   ++generation_;
   cancel_jobs();
   drawn_pick_ = Selection{};
+  selection_marker_.reset();
 }
 
 void ViewerState::cancel_jobs() {
@@ -155,6 +156,7 @@ void ViewerState::select_point(int point) {
     show_panel(Panel::kInspector);
   }
   drawn_pick_ = Selection{};
+  selection_marker_.reset();
   view_.picked_point = std::max(point, -1);
 }
 
@@ -179,6 +181,23 @@ void ViewerState::select(PickSet set, int point) {
   }
   view_.picked_point = -1;
   drawn_pick_ = {set, point, view_.frame};
+  // The marker: the picked point and the same point of the other set, every frame, built once.
+  const render::PointSeries& picked =
+      set == PickSet::kTruth ? *doc->series.truth : *doc->series.prediction;
+  const render::PointSeries& other =
+      set == PickSet::kTruth ? *doc->series.prediction : *doc->series.truth;
+  auto marker = std::make_shared<render::PointSeries>();
+  marker->num_frames = std::min(picked.num_frames, other.num_frames);
+  marker->num_points = 2;
+  for (int f = 0; f < marker->num_frames; ++f) {
+    for (const render::PointSeries* s : {&picked, &other}) {
+      const Vec3 p = s->position(f, point);
+      marker->positions.insert(
+          marker->positions.end(),
+          {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+    }
+  }
+  selection_marker_ = std::move(marker);
   show_panel(Panel::kInspector);
 }
 
@@ -280,7 +299,10 @@ void ViewerState::set_compared_rollout(const Rollout& other, const std::string& 
                                              std::to_string(rollout_->num_frames()));
   }
   compare_ = make_rollout_document(other, label, rollout_->scene ? &*rollout_->scene : nullptr);
-  if (drawn_pick_.set == PickSet::kCompared) drawn_pick_ = Selection{};
+  if (drawn_pick_.set == PickSet::kCompared) {
+    drawn_pick_ = Selection{};
+    selection_marker_.reset();
+  }
   fit_camera();
 }
 

@@ -187,6 +187,9 @@ class ViewerState {
   void select(PickSet set, int point);
   /// The current selection: a rollout point, the selected level point, or empty.
   Selection selection() const;
+  /// With a rollout point selected: it and the same point of the other set (the truth of a
+  /// predicted point, the prediction of a true one), `[T,2]`, built once per selection; else null.
+  const std::shared_ptr<render::PointSeries>& selection_marker() const { return selection_marker_; }
   /// Frame of the model trace the level browser and inspector read for the current frame: with a
   /// checkpoint, an observed frame the model cannot trace gives the first frame it can.
   int trace_frame() const;
@@ -264,6 +267,7 @@ class ViewerState {
   std::vector<std::unique_ptr<BackgroundJob<ModelTrace>>> retired_traces_;
   int dropped_ = 0;
   Selection drawn_pick_;  ///< A selected rollout point (level points live in view_.picked_point).
+  std::shared_ptr<render::PointSeries> selection_marker_;  ///< See selection_marker().
   render::ViewSpec view_;
   int data_level_ = -1;  ///< Level doc_->data was built for.
   Timeline timeline_;

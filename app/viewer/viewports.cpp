@@ -13,6 +13,7 @@ namespace {
 constexpr float kPanelWidth = 370.0f;
 constexpr float kTimelineHeight = 58.0f;
 constexpr float kErrorStripHeight = 64.0f;  // added under the timeline while a rollout is shown
+const render::Color kSelectionColor(0.95f, 0.10f, 0.55f);
 
 // The set a rollout layer draws, told by its series (each document's series are built once).
 PickSet rollout_layer_set(const ViewerState& state, const render::PointLayer& layer) {
@@ -48,6 +49,29 @@ void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
   out.points.insert(out.points.end(), levels.points.begin(), levels.points.end());
   out.lines.insert(out.lines.end(), levels.lines.begin(), levels.lines.end());
   out.boxes.insert(out.boxes.end(), levels.boxes.begin(), levels.boxes.end());
+}
+
+// The selected rollout point (large, magenta) and its counterpart in the other set, joined by the
+// error vector: drawn over every rollout viewport, never picked.
+void add_selection_marker(const ViewerState& state, int frame, Viewport& port) {
+  const std::shared_ptr<render::PointSeries>& marker = state.selection_marker();
+  if (!marker || frame >= marker->num_frames) return;
+  const RolloutDocument& doc = state.rollout();
+  render::PointLayer layer;
+  layer.name = "selected point";
+  layer.series = marker;
+  layer.frame = frame;
+  layer.coloring = render::PointColoring::kUniform;
+  layer.color = kSelectionColor;
+  layer.radius = 1.8f * doc.point_radius;
+  layer.pickable = false;
+  port.scene.points.push_back(std::move(layer));
+  port.layer_sets.push_back(PickSet::kNone);
+  render::LineSet error;
+  error.name = "selection error";
+  error.width = 3.0f;
+  error.add(marker->position(frame, 0), marker->position(frame, 1), kSelectionColor);
+  port.scene.lines.push_back(std::move(error));
 }
 
 }  // namespace
@@ -160,6 +184,7 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
     for (const render::PointLayer& l : p.scene.points) {
       p.layer_sets.push_back(rollout_layer_set(state, l));
     }
+    add_selection_marker(state, f, p);
   }
   render::RenderScene& last = out.back().scene;
   const size_t before = last.points.size();

@@ -347,6 +347,50 @@ TEST(ViewerPick, GhostModePicksThePredictionOrTheTruthDrawn) {
   EXPECT_TRUE(state.selection().empty());
 }
 
+// The selected point is marked in the 3D view, with the same point of the other set and the
+// error vector between them, at every frame it is scrubbed to, without uploads per frame.
+TEST(ViewerPick, TheSelectionIsMarkedWithItsErrorVector) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_rollout_mode(RolloutMode::kGhost);
+  state.set_frame(40);
+  const RolloutDocument& doc = state.rollout();
+  const int point = 7;
+  state.select(PickSet::kPrediction, point);
+  v.app.frame();
+  const int64_t uploads = v.app.upload_count();
+  for (int f : {41, 50, 40}) {
+    state.set_frame(f);
+    v.app.frame();
+    const std::vector<Viewport> ports = v.app.viewports();
+    ASSERT_EQ(ports.size(), 1u);
+    const render::LineSet* error = nullptr;
+    for (const render::LineSet& l : ports[0].scene.lines) {
+      if (l.name == "selection error") error = &l;
+    }
+    ASSERT_NE(error, nullptr) << f;
+    const Vec3 pred = doc.rollout.predicted[static_cast<size_t>(f)].row(point).transpose();
+    const Vec3 truth = doc.rollout.truth[static_cast<size_t>(f)].row(point).transpose();
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(error->positions[k], pred[k], 1e-5) << f;
+      EXPECT_NEAR(error->positions[3 + k], truth[k], 1e-5) << f;
+    }
+  }
+  EXPECT_EQ(v.app.upload_count(), uploads) << "the marker was uploaded again while scrubbing";
+  // The marker is drawn: magenta at the predicted point's pixel.
+  const Viewport port = v.app.viewports()[0];
+  const Vec3 s = port.camera.project(doc.rollout.predicted[40].row(point).transpose(),
+                                     testing::kWidth, testing::kHeight);
+  const render::Image image = v.app.read_pixels();
+  const uint8_t* px = image.pixel(static_cast<int>(s.x()), static_cast<int>(s.y()));
+  EXPECT_GT(px[0], 150) << "not magenta at the selected point";
+  EXPECT_LT(px[1], 90) << "not magenta at the selected point";
+  // Clearing the selection removes it.
+  state.select_point(-1);
+  EXPECT_EQ(state.selection_marker(), nullptr);
+}
+
 TEST(ViewerPick, SideBySidePicksTheSetOfTheViewportClicked) {
   HeadlessViewer v;
   ViewerState& state = v.app.state();
