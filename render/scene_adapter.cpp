@@ -11,6 +11,7 @@
 #include "engine/geometry/grid_downsample.h"
 #include "engine/geometry/interaction_points.h"
 #include "engine/geometry/neighbors.h"
+#include "engine/model/hierarchy.h"
 #include "engine/rollout/model_points.h"
 
 namespace dynscope::render {
@@ -89,10 +90,10 @@ GroundGrid grid_for_bounds(const Aabb& bounds) {
 
 namespace {
 
-// The list `name` of a trace level linking `query_level` to `source_level`, or null.
-const TraceList* find_list(const ModelTrace& trace, int level, const std::string& name) {
+// The list `which` of a trace level, or null.
+const TraceList* find_list(const ModelTrace& trace, int level, LevelList which) {
   for (const TraceList& list : trace.levels[static_cast<size_t>(level)].lists) {
-    if (list.name == name) return &list;
+    if (list.name == level_list_name(which)) return &list;
   }
   return nullptr;
 }
@@ -109,9 +110,9 @@ NeighborList list_row(const TraceList* list, int row) {
 }
 
 // ‖h‖ per neighbour of the first traced PointConv at (level, row) over list "level/name".
-std::vector<double> filter_weights(const ModelTrace& trace, int level, int row,
-                                   const std::string& name, std::string* conv) {
-  const std::string list = std::to_string(level) + "/" + name;
+std::vector<double> filter_weights(const ModelTrace& trace, int level, int row, LevelList which,
+                                   std::string* conv) {
+  const std::string list = level_list_path(level, which);
   for (const TraceQuery& q : trace.queries) {
     if (q.level != level || q.query_index != row || q.list != list) continue;
     std::vector<double> out(static_cast<size_t>(q.weights.rows()), 0.0);
@@ -266,7 +267,8 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
     out.points.push_back(layer);
   }
   const float level_radius = point_radius_ * static_cast<float>(std::pow(1.5, level_));
-  const bool trace_layers = l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
+  const bool trace_layers =
+      l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
   if (trace_ && trace_layers) check_trace_frame(frame);
   const int level_frame = trace_ ? 0 : frame;  // a trace's level series holds its one frame
   if (l.level_points && level_series_ && (trace_ || level_ > 0 || !l.ground_truth)) {
@@ -323,17 +325,18 @@ SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int 
     const ModelTrace& t = *trace_;
     out.positions = t.levels[static_cast<size_t>(level_)].points;
     out.object = level_object_;
-    out.same = list_row(find_list(t, level_, "same"), picked);
-    out.relational = list_row(find_list(t, level_, "relational"), picked);
-    out.same_weight = filter_weights(t, level_, picked, "same", &out.same_conv);
-    out.relational_weight = filter_weights(t, level_, picked, "relational", &out.relational_conv);
+    out.same = list_row(find_list(t, level_, LevelList::kSame), picked);
+    out.relational = list_row(find_list(t, level_, LevelList::kRelational), picked);
+    out.same_weight = filter_weights(t, level_, picked, LevelList::kSame, &out.same_conv);
+    out.relational_weight =
+        filter_weights(t, level_, picked, LevelList::kRelational, &out.relational_conv);
     if (level_ > 0) {
       const Points& below = t.levels[static_cast<size_t>(level_ - 1)].points;
-      const NeighborList down = list_row(find_list(t, level_, "down"), picked);
+      const NeighborList down = list_row(find_list(t, level_, LevelList::kDown), picked);
       for (Eigen::Index j = 0; j < down.k(); ++j) {
         if (down.mask(0, j)) out.sources.push_back(down.index(0, j));
       }
-      if (const TraceList* up = find_list(t, level_, "up")) {
+      if (const TraceList* up = find_list(t, level_, LevelList::kUp)) {
         for (Eigen::Index row = 0; row < up->index.rows(); ++row) {
           for (Eigen::Index j = 0; j < up->index.cols(); ++j) {
             if (up->mask(row, j) && up->index(row, j) == picked) {
@@ -345,7 +348,8 @@ SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int 
       }
       auto rows = [&](const std::vector<int32_t>& idx) {
         Points p(static_cast<Eigen::Index>(idx.size()), 3);
-        for (size_t i = 0; i < idx.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = below.row(idx[i]);
+        for (size_t i = 0; i < idx.size(); ++i)
+          p.row(static_cast<Eigen::Index>(i)) = below.row(idx[i]);
         return p;
       };
       out.source_positions = rows(out.sources);
@@ -409,8 +413,7 @@ void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewS
     out.points.push_back(layer);
   };
   add_list(nb.same, nb.same_weight, kObjectEdgeColor, true, "object neighbours");
-  add_list(nb.relational, nb.relational_weight, kRelationEdgeColor, false,
-           "relational neighbours");
+  add_list(nb.relational, nb.relational_weight, kRelationEdgeColor, false, "relational neighbours");
   // Level k−1 points pooled into the picked point (purple) and those it feeds when upsampling.
   auto add_level_below = [&](const Points& p, const Color& color, const std::string& name) {
     if (p.rows() == 0) return;
@@ -441,7 +444,7 @@ void SceneRenderData::add_trace_interaction_points(RenderScene& out, int frame) 
   const Points& vertices = trace_->levels.front().points;
   const TraceList* senders = nullptr;
   for (const TraceList& l : mesh.lists) {
-    if (l.name == "senders") senders = &l;
+    if (l.name == mesh_list_name(MeshList::kSenders)) senders = &l;
   }
   if (mesh.points.rows() == 0) return;
   LineSet pairs, faces;
@@ -535,7 +538,7 @@ std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
   }
   if (l.neighborhoods && view.picked_point >= 0) {
     char text[128];
-    const TraceList* same = trace_ ? find_list(*trace_, level_, "same") : nullptr;
+    const TraceList* same = trace_ ? find_list(*trace_, level_, LevelList::kSame) : nullptr;
     const int k = same ? static_cast<int>(same->index.cols()) : view.neighbors;
     std::snprintf(text, sizeof(text), "point %d: knn %d (blue), r %.3g (orange)", view.picked_point,
                   k, level_radius());
@@ -637,11 +640,10 @@ RolloutRenderData make_rollout_render_data(Rollout rollout, const Scene* scene,
   d.grid = grid_for_bounds(d.bounds);
   // Points a third of the sampling voxel apart would overlap; without a voxel, scale by extent.
   const double extent = d.bounds.empty() ? 1.0 : (d.bounds.max - d.bounds.min).norm();
-  d.point_radius =
-      point_radius > 0.0f
-          ? point_radius
-          : static_cast<float>(rollout.sampling_voxel > 0 ? 0.3 * rollout.sampling_voxel
-                                                          : 0.01 * std::max(extent, 1e-3));
+  d.point_radius = point_radius > 0.0f ? point_radius
+                                       : static_cast<float>(rollout.sampling_voxel > 0
+                                                                ? 0.3 * rollout.sampling_voxel
+                                                                : 0.01 * std::max(extent, 1e-3));
   d.geometry.resize(static_cast<size_t>(rollout.num_objects()));
   if (scene != nullptr && scene->num_frames() >= rollout.num_frames()) {
     d.scene = *scene;

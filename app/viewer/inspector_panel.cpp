@@ -5,6 +5,7 @@
 
 #include "app/viewer/panel_util.h"
 #include "app/viewer/panels.h"
+#include "engine/model/hierarchy.h"
 #include "engine/model/model_config.h"
 
 namespace dynscope::app::viewer {
@@ -27,7 +28,7 @@ void draw_trace_features(const ModelTrace& trace, int level, int picked) {
 void draw_trace_mesh(const ViewerState& state, const ModelTrace& trace, Actions& out) {
   int pairs = 0;
   for (const TraceList& l : trace.mesh.lists) {
-    if (l.name == "senders") pairs = static_cast<int>(l.mask.count());
+    if (l.name == mesh_list_name(MeshList::kSenders)) pairs = static_cast<int>(l.mask.count());
   }
   double threshold = 0.0;
   try {

@@ -36,7 +36,7 @@ namespace dynscope {
 
 /// A neighbour list of a trace: `[M,K]` indices (−1 masked) and mask, plus which levels it links.
 struct TraceList {
-  std::string name;  ///< "same", "relational", "down", "up", or a mesh list name.
+  std::string name;  ///< level_list_name or mesh_list_name (engine/model/hierarchy.h).
   int query_level = 0;
   int source_level = 0;
   IndexMatrix index;

@@ -135,4 +135,66 @@ Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t
   return h;
 }
 
+const char* level_list_name(LevelList list) {
+  switch (list) {
+    case LevelList::kSame:
+      return "same";
+    case LevelList::kRelational:
+      return "relational";
+    case LevelList::kDown:
+      return "down";
+    case LevelList::kUp:
+      return "up";
+  }
+  return "";
+}
+
+const NeighborList& level_list(const HierarchyLevel& level, LevelList list) {
+  switch (list) {
+    case LevelList::kSame:
+      return level.same;
+    case LevelList::kRelational:
+      return level.relational;
+    case LevelList::kDown:
+      return level.down;
+    case LevelList::kUp:
+      break;
+  }
+  return level.up;
+}
+
+int list_query_level(LevelList list, int l) { return list == LevelList::kUp ? l - 1 : l; }
+int list_source_level(LevelList list, int l) { return list == LevelList::kDown ? l - 1 : l; }
+
+std::string level_list_path(int l, LevelList list) {
+  return std::to_string(l) + "/" + level_list_name(list);
+}
+
+const char* mesh_list_name(MeshList list) {
+  switch (list) {
+    case MeshList::kFaceVertices:
+      return "face_vertices";
+    case MeshList::kSenders:
+      return "senders";
+    case MeshList::kVertexPoints:
+      return "vertex_points";
+  }
+  return "";
+}
+
+const NeighborList& mesh_list(const MeshInteraction& mesh, MeshList list) {
+  switch (list) {
+    case MeshList::kFaceVertices:
+      return mesh.face_vertices;
+    case MeshList::kSenders:
+      return mesh.senders;
+    case MeshList::kVertexPoints:
+      break;
+  }
+  return mesh.vertex_points;
+}
+
+int mesh_list_query_level(MeshList list) { return list == MeshList::kVertexPoints ? 0 : -1; }
+int mesh_list_source_level(MeshList list) { return list == MeshList::kFaceVertices ? 0 : -1; }
+
 }  // namespace dynscope

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "engine/core/types.h"
@@ -57,6 +58,32 @@ struct Hierarchy {
 
   int num_levels() const { return static_cast<int>(levels.size()); }
 };
+
+/// The neighbour lists of a level, by the names traces, trace files, views and the inspector use
+/// (one definition; a trace query's list is "<level>/<name>").
+enum class LevelList { kSame, kRelational, kDown, kUp };
+inline constexpr LevelList kLevelLists[] = {LevelList::kSame, LevelList::kRelational,
+                                            LevelList::kDown, LevelList::kUp};
+/// "same", "relational", "down", "up".
+const char* level_list_name(LevelList list);
+/// The list `list` of `level`.
+const NeighborList& level_list(const HierarchyLevel& level, LevelList list);
+/// Level of the queries and of the sources of `list` at level `l` (down: l, l−1; up: l−1, l).
+int list_query_level(LevelList list, int l);
+int list_source_level(LevelList list, int l);
+/// "<l>/<name>": how a trace query names the list it read.
+std::string level_list_path(int l, LevelList list);
+
+/// The interaction-point lists of mesh input (MeshInteraction), by their trace names; levels
+/// −1 (interaction points) and 0 (vertices).
+enum class MeshList { kFaceVertices, kSenders, kVertexPoints };
+inline constexpr MeshList kMeshLists[] = {MeshList::kFaceVertices, MeshList::kSenders,
+                                          MeshList::kVertexPoints};
+/// "face_vertices", "senders", "vertex_points".
+const char* mesh_list_name(MeshList list);
+const NeighborList& mesh_list(const MeshInteraction& mesh, MeshList list);
+int mesh_list_query_level(MeshList list);   ///< −1, −1, 0
+int mesh_list_source_level(MeshList list);  ///< 0, −1, −1
 
 /// Builds the hierarchy of `points` `[N,3]` with `object_ids` `[N]`. Throws ValueError on size
 /// mismatch, no points, non-finite values or options out of range.

@@ -44,14 +44,15 @@ std::vector<ConvSite> conv_sites(UNetImpl& unet, const HierarchyTensors& h) {
   };
   auto rel = [&](std::vector<ConvSite>& s, const std::string& prefix, InteractionBlockImpl* b,
                  int l) {
-    add_site(s, prefix + ".relational.conv", b->relational, l, std::to_string(l) + "/relational",
-             lv[l].points, lv[l].points, lv[l].relational);
+    add_site(s, prefix + ".relational.conv", b->relational, l,
+             level_list_path(l, LevelList::kRelational), lv[l].points, lv[l].points,
+             lv[l].relational);
   };
   for (size_t i = 0; i < unet.stem_list->size(); ++i) {
     InteractionBlockImpl* b = block(unet.stem_list, i);
     const std::string p = "unet.stem." + std::to_string(i);
-    add_site(sites, p + ".object.conv", b->object, 0, "0/same", lv[0].points, lv[0].points,
-             lv[0].same);
+    add_site(sites, p + ".object.conv", b->object, 0, level_list_path(0, LevelList::kSame),
+             lv[0].points, lv[0].points, lv[0].same);
     rel(sites, p, b, 0);
   }
   for (int l = 0; l + 1 < levels; ++l) {
@@ -65,8 +66,8 @@ std::vector<ConvSite> conv_sites(UNetImpl& unet, const HierarchyTensors& h) {
     InteractionBlockImpl* b = block(unet.bottleneck_list, i);
     const int l = levels - 1;
     const std::string p = "unet.bottleneck." + std::to_string(i);
-    add_site(sites, p + ".object.conv", b->object, l, std::to_string(l) + "/same", lv[l].points,
-             lv[l].points, lv[l].same);
+    add_site(sites, p + ".object.conv", b->object, l, level_list_path(l, LevelList::kSame),
+             lv[l].points, lv[l].points, lv[l].same);
     rel(sites, p, b, l);
   }
   for (int l = levels - 2, j = 0; l >= 0; --l, ++j) {
@@ -113,10 +114,10 @@ ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& 
     lv.kept = src.kept;
     lv.voxel = src.voxel;
     lv.radius = src.radius;
-    add_list(lv.lists, "same", src.same, l, l);
-    add_list(lv.lists, "relational", src.relational, l, l);
-    add_list(lv.lists, "down", src.down, l, l - 1);
-    add_list(lv.lists, "up", src.up, l - 1, l);
+    for (LevelList list : kLevelLists) {
+      add_list(lv.lists, level_list_name(list), level_list(src, list), list_query_level(list, l),
+               list_source_level(list, l));
+    }
     t.levels.push_back(std::move(lv));
   }
   if (h.has_mesh) {
@@ -126,9 +127,10 @@ ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& 
     t.mesh.face = h.mesh.face;
     t.mesh.object_ids = h.mesh.object_ids;
     // Levels here: −1 stands for the interaction points, 0 for the vertices.
-    add_list(t.mesh.lists, "face_vertices", h.mesh.face_vertices, -1, 0);
-    add_list(t.mesh.lists, "senders", h.mesh.senders, -1, -1);
-    add_list(t.mesh.lists, "vertex_points", h.mesh.vertex_points, 0, -1);
+    for (MeshList list : kMeshLists) {
+      add_list(t.mesh.lists, mesh_list_name(list), mesh_list(h.mesh, list),
+               mesh_list_query_level(list), mesh_list_source_level(list));
+    }
   }
   for (const BlockRecord& r : records) {
     const torch::Tensor n = r.features.pow(2).sum(1).sqrt().to(torch::kDouble).contiguous();
