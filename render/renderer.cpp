@@ -262,13 +262,17 @@ void Renderer::draw_scene(const RenderScene& scene, const Camera& camera, int w,
     if (layer.opacity >= 1.0f) draw_points(layer, discs, view, proj, light, h);
   }
   draw_lines_and_boxes(scene, view, proj);
-  // Translucent layers last, without depth writes, so they never hide what is behind them.
+  // Translucent layers last, without depth writes, so they never hide what is behind them; and
+  // strictly in front only, so a translucent copy at the same depth as an opaque surface (the
+  // truth ghost over the prediction at an observed frame) does not tint it.
   gl_.DepthMask(GL_FALSE);
+  gl_.DepthFunc(GL_LESS);
   draw_meshes(scene, true, view, proj, light);
   for (const PointLayer& layer : scene.points) {
     if (layer.opacity < 1.0f) draw_points(layer, discs, view, proj, light, h);
   }
   if (discs) gl_.Disable(GL_PROGRAM_POINT_SIZE);
+  gl_.DepthFunc(GL_LEQUAL);
   gl_.DepthMask(GL_TRUE);
   gl_.BindVertexArray(0);
 }

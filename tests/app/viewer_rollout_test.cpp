@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -132,6 +133,40 @@ TEST(ViewerRollout, ModesChangeTheLayersDrawn) {
   const render::PointLayer& p = v.app.viewports()[0].scene.points[0];
   EXPECT_EQ(p.coloring, render::PointColoring::kScalar);
   EXPECT_FLOAT_EQ(p.range_max, 0.25f);
+}
+
+// At an observed frame truth and prediction coincide: the translucent truth ghost must not tint
+// the prediction (it once did, by drawing over it at equal depth), so ghost mode looks exactly
+// like prediction-only mode there.
+TEST(ViewerRollout, GhostAtAnObservedFrameLeavesThePredictionUntinted) {
+  HeadlessViewer v;
+  ViewerState& state = v.app.state();
+  state.open_rollout(collide_rollout_file());
+  state.set_frame(0);
+  state.set_rollout_mode(RolloutMode::kPrediction);
+  v.app.frame();
+  v.app.frame();
+  const render::Image alone = v.app.read_pixels();
+  state.set_rollout_mode(RolloutMode::kGhost);
+  v.app.frame();
+  v.app.frame();
+  const render::Image ghost = v.app.read_pixels();
+  int differing = 0, drawn = 0;
+  for (int y = 10; y < testing::kHeight - 140; ++y) {
+    for (int x = 400; x < testing::kWidth; ++x) {
+      const uint8_t* a = alone.pixel(x, y);
+      const uint8_t* b = ghost.pixel(x, y);
+      if (a[0] != alone.pixel(testing::kWidth - 2, 12)[0]) ++drawn;
+      for (int c = 0; c < 3; ++c) {
+        if (std::abs(int{a[c]} - int{b[c]}) > 2) {
+          ++differing;
+          break;
+        }
+      }
+    }
+  }
+  EXPECT_GT(drawn, 1000) << "nothing drawn in the 3D view";
+  EXPECT_EQ(differing, 0) << "the ghost changed pixels where it coincides with the prediction";
 }
 
 TEST(ViewerRollout, ScrubbingAddsNoUploads) {
