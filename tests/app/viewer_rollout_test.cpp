@@ -130,7 +130,8 @@ TEST(ViewerRollout, ModesChangeTheLayersDrawn) {
   view.auto_range = false;
   view.range_max = 0.25f;
   v.app.state().set_view(view);
-  const render::PointLayer& p = v.app.viewports()[0].scene.points[0];
+  // A copy: viewports() returns a temporary (a reference into it dangled; AddressSanitizer).
+  const render::PointLayer p = v.app.viewports()[0].scene.points[0];
   EXPECT_EQ(p.coloring, render::PointColoring::kScalar);
   EXPECT_FLOAT_EQ(p.range_max, 0.25f);
 }
