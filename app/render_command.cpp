@@ -99,7 +99,9 @@ void add_render_command(CLI::App& app) {
       "(one forward pass is traced at the frame, saved as DIR/trace.h5) they are the model's\n"
       "own: level points, voxels, object kNN and relational lists of --pick at --level, the\n"
       "level-below points pooled into it and fed by it, and the learned filter |h(p_k - p_0)|\n"
-      "as neighbour colour. Without either, levels are a rest-frame preview.");
+      "as neighbour colour. Without either, they are the model's hierarchy at each rendered\n"
+      "frame as the scenario's preset builds it (the same lists, no filter weights; mesh input\n"
+      "when the view shows interaction points).");
   cmd->add_option("input", options->scene_path, "SCENE.h5|ROLLOUT.h5: scene or rollout file (HDF5)")
       ->required();
   cmd->add_option("--view", options->view_path, "View spec JSON (camera, layers, colormap, ...)");

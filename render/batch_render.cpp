@@ -270,14 +270,25 @@ BatchRenderResult render_scene_file(GlContext& context, const BatchRenderOptions
     if (options.frames.empty()) options.frames = std::to_string(trace->frame);
   }
   const ViewSpec view = resolve_view(options, ViewLayers{});
-  const SceneRenderData data(scene, view, trace);
+  // Without a trace, levels and neighbourhoods are the model's hierarchy at each rendered frame.
+  std::shared_ptr<LevelViews> levels;
+  if (!trace && view_needs_levels(view)) {
+    levels = make_level_views(scene, view);
+    const int first =
+        options.frames.empty() ? 0 : parse_frame_range(options.frames, scene.num_frames()).first;
+    trace = levels->at(first);
+  }
+  SceneRenderData data(scene, view, trace);
   const std::vector<std::string> legend = data.legend(view);
   FrameSource source;
   source.path = options.scene_path;
   source.num_frames = scene.num_frames();
   source.dt_s = scene.dt_s;
   source.bounds = [&](int first, int last) { return data.bounds(first, last); };
-  source.frame = [&](int f, const ViewSpec& v) { return data.frame(f, v); };
+  source.frame = [&](int f, const ViewSpec& v) {
+    if (levels) data.set_levels(levels->at(f));
+    return data.frame(f, v);
+  };
   source.caption = [&](int f) {
     std::vector<std::string> lines = {frame_caption(f, source.num_frames)};
     lines.insert(lines.end(), legend.begin(), legend.end());

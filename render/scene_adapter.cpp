@@ -8,10 +8,8 @@
 #include <tuple>
 
 #include "engine/core/error.h"
-#include "engine/geometry/grid_downsample.h"
-#include "engine/geometry/interaction_points.h"
-#include "engine/geometry/neighbors.h"
 #include "engine/model/hierarchy.h"
+#include "engine/rollout/level_view.h"
 #include "engine/rollout/model_points.h"
 
 namespace dynscope::render {
@@ -49,28 +47,6 @@ std::shared_ptr<PointSeries> single_point(const Vec3& p) {
   Points one(1, 3);
   one.row(0) = p.transpose();
   return make_point_series({one});
-}
-
-std::shared_ptr<PointSeries> subset_series(const PointSeries& all,
-                                           const std::vector<int32_t>& idx) {
-  auto out = std::make_shared<PointSeries>();
-  out->num_frames = all.num_frames;
-  out->num_points = static_cast<int>(idx.size());
-  out->positions.reserve(static_cast<size_t>(out->num_frames) * idx.size() * 3);
-  for (int f = 0; f < all.num_frames; ++f) {
-    for (int32_t i : idx) {
-      const size_t k = (static_cast<size_t>(f) * all.num_points + i) * 3;
-      out->positions.insert(out->positions.end(), all.positions.begin() + k,
-                            all.positions.begin() + k + 3);
-    }
-  }
-  if (!all.colors.empty()) {
-    for (int32_t i : idx) {
-      out->colors.insert(out->colors.end(), all.colors.begin() + 3 * i,
-                         all.colors.begin() + 3 * i + 3);
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -136,23 +112,15 @@ Vec3 trace_grid_anchor(const ModelTrace& trace) {
 
 SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view,
                                  std::shared_ptr<const ModelTrace> trace)
-    : scene_(scene), trace_(std::move(trace)) {
+    : scene_(scene) {
   scene_.validate();
   view.validate();
   level_ = view.level;
-  if (trace_) {
-    if (level_ >= static_cast<int>(trace_->levels.size())) {
-      throw ValueError("level", std::to_string(level_) + " is not a level of the trace (it has " +
-                                    std::to_string(trace_->levels.size()) + ")");
-    }
-    if (trace_->frame < 0 || trace_->frame >= scene_.num_frames()) {
-      throw ValueError("trace", "frame " + std::to_string(trace_->frame) +
-                                    " is not a frame of the scene (" +
-                                    std::to_string(scene_.num_frames()) + " frames)");
-    }
+  if (!trace && level_ > 0) {
+    throw ValueError("level", "level " + std::to_string(level_) +
+                                  " needs the model's hierarchy: pass a trace or a level view");
   }
   voxel_ = view.voxel > 0 ? view.voxel : default_sampling_voxel(scene_.scenario);
-  radius0_ = view.relation_radius > 0 ? view.relation_radius : 2.0 * voxel_;
   point_radius_ = view.point_radius > 0 ? view.point_radius : static_cast<float>(0.3 * voxel_);
   for (const Object& o : scene_.objects) {
     geometry_.push_back(o.rigid && !o.mesh.empty() ? make_mesh_geometry(o.mesh) : nullptr);
@@ -160,42 +128,58 @@ SceneRenderData::SceneRenderData(const Scene& scene, const ViewSpec& view,
   const ViewLayers& l = view.layers;
   const bool need_points =
       l.ground_truth || l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
-  if (!need_points || scene_.num_frames() == 0) return;
-  if (trace_) {
-    const TraceLevel& level = trace_->levels[static_cast<size_t>(level_)];
-    level_series_ = make_point_series({level.points});
-    level_series_->colors = categorical_colors(level.object_ids);
-    level_object_ = level.object_ids;
-    if (!l.ground_truth) return;
+  if (need_points && scene_.num_frames() > 0) {
+    PointCloudOptions options;
+    options.voxel = voxel_;
+    cloud_ = build_point_cloud(scene_, options);
+    std::vector<Points> frames;
+    frames.reserve(scene_.num_frames());
+    for (int f = 0; f < scene_.num_frames(); ++f) frames.push_back(cloud_.positions(scene_, f));
+    cloud_series_ = make_point_series(frames);
+    cloud_series_->colors = categorical_colors(cloud_.object_id);
   }
-  PointCloudOptions options;
-  options.voxel = voxel_;
-  cloud_ = build_point_cloud(scene_, options);
-  std::vector<Points> frames;
-  frames.reserve(scene_.num_frames());
-  for (int f = 0; f < scene_.num_frames(); ++f) frames.push_back(cloud_.positions(scene_, f));
-  cloud_series_ = make_point_series(frames);
-  cloud_series_->colors = categorical_colors(cloud_.object_id);
-  if (trace_) return;
-  if (level_ == 0) {
-    level_indices_.resize(cloud_.size());
-    for (Eigen::Index i = 0; i < cloud_.size(); ++i) level_indices_[i] = static_cast<int32_t>(i);
+  if (trace) {
+    set_levels(std::move(trace));
+  } else if (cloud_series_) {
+    // Level 0 without the model's hierarchy: the sampled points themselves, at every frame.
     level_series_ = cloud_series_;
-  } else {
-    // Downsampling in each object's rest frame keeps the level's points fixed over time.
-    level_indices_ = grid_downsample_per_object(cloud_.rest, cloud_.object_id, level_voxel());
-    level_series_ = subset_series(*cloud_series_, level_indices_);
+    level_object_ = cloud_.object_id;
   }
-  for (int32_t i : level_indices_) level_object_.push_back(cloud_.object_id[i]);
 }
+
+void SceneRenderData::set_levels(std::shared_ptr<const ModelTrace> trace) {
+  if (!trace) throw ValueError("trace", "no trace or level view given");
+  if (level_ >= static_cast<int>(trace->levels.size())) {
+    throw ValueError("level", std::to_string(level_) + " is not a level of the model's " +
+                                  "hierarchy (it has " + std::to_string(trace->levels.size()) +
+                                  ": 0.." + std::to_string(trace->levels.size() - 1) + ")");
+  }
+  if (trace->frame < 0 || trace->frame >= scene_.num_frames()) {
+    throw ValueError("trace", "frame " + std::to_string(trace->frame) +
+                                  " is not a frame of the scene (" +
+                                  std::to_string(scene_.num_frames()) + " frames)");
+  }
+  const TraceLevel& level = trace->levels[static_cast<size_t>(level_)];
+  level_series_ = make_point_series({level.points});
+  level_series_->colors = categorical_colors(level.object_ids);
+  level_object_ = level.object_ids;
+  trace_ = std::move(trace);
+}
+
+int SceneRenderData::level_size() const { return static_cast<int>(level_object_.size()); }
 
 double SceneRenderData::level_voxel() const {
   if (trace_ && level_ > 0) return trace_->levels[static_cast<size_t>(level_)].voxel;
-  return voxel_ * std::pow(1.5, level_);
+  return voxel_;
 }
 double SceneRenderData::level_radius() const {
-  if (trace_) return trace_->levels[static_cast<size_t>(level_)].radius;
-  return radius0_ * std::pow(1.5, level_);
+  return trace_ ? trace_->levels[static_cast<size_t>(level_)].radius : 0.0;
+}
+
+void SceneRenderData::require_levels(const char* what) const {
+  if (!trace_) {
+    throw ValueError(what, "needs the model's hierarchy: pass a trace or a level view");
+  }
 }
 
 void SceneRenderData::check_trace_frame(int frame) const {
@@ -271,7 +255,7 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
       l.level_points || l.voxels || (l.neighborhoods && view.picked_point >= 0);
   if (trace_ && trace_layers) check_trace_frame(frame);
   const int level_frame = trace_ ? 0 : frame;  // a trace's level series holds its one frame
-  if (l.level_points && level_series_ && (trace_ || level_ > 0 || !l.ground_truth)) {
+  if (l.level_points && level_series_ && (trace_ || !l.ground_truth)) {
     PointLayer layer;
     layer.name = "level " + std::to_string(level_);
     layer.series = level_series_;
@@ -306,8 +290,7 @@ RenderScene SceneRenderData::frame(int frame, const ViewSpec& view) const {
   return out;
 }
 
-SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int picked,
-                                                                 int k) const {
+SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int picked) const {
   const int n = level_size();
   if (picked < 0 || picked >= n) {
     throw ValueError("picked_point", std::to_string(picked) + " is outside the " +
@@ -318,61 +301,48 @@ SceneRenderData::LevelNeighbors SceneRenderData::level_neighbors(int frame, int 
     throw ValueError(
         "frame", std::to_string(frame) + " is outside [0, " + std::to_string(num_frames()) + ")");
   }
-  if (k < 1) throw ValueError("neighbors", std::to_string(k) + " must be at least 1");
+  require_levels("neighborhoods");
+  check_trace_frame(frame);
   LevelNeighbors out;
-  if (trace_) {
-    check_trace_frame(frame);
-    const ModelTrace& t = *trace_;
-    out.positions = t.levels[static_cast<size_t>(level_)].points;
-    out.object = level_object_;
-    out.same = list_row(find_list(t, level_, LevelList::kSame), picked);
-    out.relational = list_row(find_list(t, level_, LevelList::kRelational), picked);
-    out.same_weight = filter_weights(t, level_, picked, LevelList::kSame, &out.same_conv);
-    out.relational_weight =
-        filter_weights(t, level_, picked, LevelList::kRelational, &out.relational_conv);
-    if (level_ > 0) {
-      const Points& below = t.levels[static_cast<size_t>(level_ - 1)].points;
-      const NeighborList down = list_row(find_list(t, level_, LevelList::kDown), picked);
-      for (Eigen::Index j = 0; j < down.k(); ++j) {
-        if (down.mask(0, j)) out.sources.push_back(down.index(0, j));
-      }
-      if (const TraceList* up = find_list(t, level_, LevelList::kUp)) {
-        for (Eigen::Index row = 0; row < up->index.rows(); ++row) {
-          for (Eigen::Index j = 0; j < up->index.cols(); ++j) {
-            if (up->mask(row, j) && up->index(row, j) == picked) {
-              out.feeds.push_back(static_cast<int32_t>(row));
-              break;
-            }
+  const ModelTrace& t = *trace_;
+  out.positions = t.levels[static_cast<size_t>(level_)].points;
+  out.object = level_object_;
+  out.same = list_row(find_list(t, level_, LevelList::kSame), picked);
+  out.relational = list_row(find_list(t, level_, LevelList::kRelational), picked);
+  out.same_weight = filter_weights(t, level_, picked, LevelList::kSame, &out.same_conv);
+  out.relational_weight =
+      filter_weights(t, level_, picked, LevelList::kRelational, &out.relational_conv);
+  if (level_ > 0) {
+    const Points& below = t.levels[static_cast<size_t>(level_ - 1)].points;
+    const NeighborList down = list_row(find_list(t, level_, LevelList::kDown), picked);
+    for (Eigen::Index j = 0; j < down.k(); ++j) {
+      if (down.mask(0, j)) out.sources.push_back(down.index(0, j));
+    }
+    if (const TraceList* up = find_list(t, level_, LevelList::kUp)) {
+      for (Eigen::Index row = 0; row < up->index.rows(); ++row) {
+        for (Eigen::Index j = 0; j < up->index.cols(); ++j) {
+          if (up->mask(row, j) && up->index(row, j) == picked) {
+            out.feeds.push_back(static_cast<int32_t>(row));
+            break;
           }
         }
       }
-      auto rows = [&](const std::vector<int32_t>& idx) {
-        Points p(static_cast<Eigen::Index>(idx.size()), 3);
-        for (size_t i = 0; i < idx.size(); ++i)
-          p.row(static_cast<Eigen::Index>(i)) = below.row(idx[i]);
-        return p;
-      };
-      out.source_positions = rows(out.sources);
-      out.feed_positions = rows(out.feeds);
     }
-    return out;
+    auto rows = [&](const std::vector<int32_t>& idx) {
+      Points p(static_cast<Eigen::Index>(idx.size()), 3);
+      for (size_t i = 0; i < idx.size(); ++i)
+        p.row(static_cast<Eigen::Index>(i)) = below.row(idx[i]);
+      return p;
+    };
+    out.source_positions = rows(out.sources);
+    out.feed_positions = rows(out.feeds);
   }
-  // Exact (double) positions, not the float GPU series, so listed distances are exact.
-  const Points all = cloud_.positions(scene_, frame);
-  out.positions.resize(n, 3);
-  for (int i = 0; i < n; ++i) out.positions.row(i) = all.row(level_indices_[i]);
-  out.object = level_object_;
-  const Points query = out.positions.row(picked);
-  const std::vector<int32_t> query_id = {level_object_[picked]};
-  out.same = knn_same_object(query, query_id, out.positions, level_object_, k);
-  out.relational =
-      knn_other_objects(query, query_id, out.positions, level_object_, k, level_radius());
   return out;
 }
 
 void SceneRenderData::add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const {
   const int picked = view.picked_point;
-  const LevelNeighbors nb = level_neighbors(frame, picked, view.neighbors);
+  const LevelNeighbors nb = level_neighbors(frame, picked);
   const Points& positions = nb.positions;
   LineSet edges;
   edges.name = "neighbourhood";
@@ -487,43 +457,9 @@ void SceneRenderData::add_trace_interaction_points(RenderScene& out, int frame) 
 }
 
 void SceneRenderData::add_interaction_points(RenderScene& out, int frame) const {
-  if (trace_ && trace_->has_mesh) {
-    add_trace_interaction_points(out, frame);
-    return;
-  }
-  Points vertices(0, 3);
-  Faces faces(0, 3);
-  std::vector<int32_t> face_object;
-  for (size_t i = 0; i < scene_.objects.size(); ++i) {
-    const Points v = scene_.world_vertices(static_cast<int>(i), frame);
-    const Faces& f = scene_.objects[i].mesh.faces;
-    const Eigen::Index v0 = vertices.rows(), f0 = faces.rows();
-    vertices.conservativeResize(v0 + v.rows(), 3);
-    vertices.bottomRows(v.rows()) = v;
-    faces.conservativeResize(f0 + f.rows(), 3);
-    faces.bottomRows(f.rows()) = (f.array() + static_cast<int32_t>(v0)).matrix();
-    face_object.insert(face_object.end(), f.rows(), scene_.objects[i].id);
-  }
-  const InteractionPoints ip = find_interaction_points(vertices, faces, face_object, radius0_, 2);
-  if (ip.size() == 0) return;
-  LineSet pairs;
-  pairs.name = "interaction points";
-  pairs.color = kInteractionColor;
-  pairs.width = 2.0f;
-  Points ends(static_cast<Eigen::Index>(2 * ip.size()), 3);
-  for (size_t p = 0; p < ip.size(); ++p) {
-    pairs.add(ip.point_a.row(p).transpose(), ip.point_b.row(p).transpose(), kInteractionColor);
-    ends.row(static_cast<Eigen::Index>(2 * p)) = ip.point_a.row(p);
-    ends.row(static_cast<Eigen::Index>(2 * p + 1)) = ip.point_b.row(p);
-  }
-  out.lines.push_back(std::move(pairs));
-  PointLayer layer;
-  layer.name = "interaction points";
-  layer.series = make_point_series({ends});
-  layer.color = kInteractionColor;
-  layer.radius = 0.6f * point_radius_;
-  layer.pickable = false;
-  out.points.push_back(layer);
+  require_levels("interaction_points");
+  // A model that reads points has no interaction points: nothing to draw (the legend says so).
+  if (trace_->has_mesh) add_trace_interaction_points(out, frame);
 }
 
 std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
@@ -532,18 +468,20 @@ std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
   if (l.ground_truth) lines.push_back("points: " + std::to_string(cloud_.size()));
   if (l.level_points || l.voxels) {
     char text[96];
+    const char* source =
+        !trace_ ? "" : (is_level_view(*trace_) ? " (model hierarchy)" : " (model trace)");
     std::snprintf(text, sizeof(text), "level %d: %d points, voxel %.3g%s", level_, level_size(),
-                  level_voxel(), trace_ ? " (model trace)" : "");
+                  level_voxel(), source);
     lines.push_back(text);
   }
   if (l.neighborhoods && view.picked_point >= 0) {
     char text[128];
     const TraceList* same = trace_ ? find_list(*trace_, level_, LevelList::kSame) : nullptr;
-    const int k = same ? static_cast<int>(same->index.cols()) : view.neighbors;
+    const int k = same ? static_cast<int>(same->index.cols()) : 0;
     std::snprintf(text, sizeof(text), "point %d: knn %d (blue), r %.3g (orange)", view.picked_point,
                   k, level_radius());
     lines.push_back(text);
-    if (trace_) {
+    if (trace_ && !is_level_view(*trace_)) {
       lines.push_back("neighbour colour: norm of h(p_k - p_0) (viridis) where traced");
       if (level_ > 0) lines.push_back("purple: pooled from level below; teal: fed when upsampling");
     }
@@ -551,9 +489,26 @@ std::vector<std::string> SceneRenderData::legend(const ViewSpec& view) const {
   if (l.interaction_points) {
     lines.push_back(trace_ && trace_->has_mesh
                         ? "model interaction points: pairs and receiver faces green, senders orange"
-                        : "interaction points (green)");
+                        : "no interaction points: the model reads points, not meshes");
   }
   return lines;
+}
+
+bool view_needs_levels(const ViewSpec& view) {
+  const ViewLayers& l = view.layers;
+  return (view.level > 0 && (l.level_points || l.voxels || l.neighborhoods)) ||
+         (l.neighborhoods && view.picked_point >= 0) || l.interaction_points;
+}
+
+ModelConfig level_view_config(const Scene& scene, const ViewSpec& view) {
+  return dynscope::level_view_config(
+      scene, view.layers.interaction_points ? InputMode::kMesh : InputMode::kPoints);
+}
+
+std::shared_ptr<LevelViews> make_level_views(const Scene& scene, const ViewSpec& view) {
+  SamplingOptions sampling;
+  sampling.voxel = view.voxel;
+  return std::make_shared<LevelViews>(scene, level_view_config(scene, view), sampling);
 }
 
 ComparisonSeries make_comparison_series(const std::vector<Points>& truth,

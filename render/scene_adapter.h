@@ -10,6 +10,7 @@
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/io/trace_file.h"
+#include "engine/rollout/level_view.h"
 #include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
 #include "render/render_scene.h"
@@ -22,43 +23,47 @@ namespace dynscope::render {
 GroundGrid grid_for_bounds(const Aabb& bounds);
 
 /// Everything derived once from a Scene to draw any of its frames: shared mesh geometry, the
-/// point cloud of every frame as one PointSeries, and the points of the view's U-Net level.
+/// sampled point cloud of every frame as one PointSeries, and the points of the view's U-Net level.
 /// Building it samples points, so it is done once per scene and view, not per frame.
 ///
-/// Without a trace, levels are the scene's surface points grid-downsampled per object in the
-/// rest frame (a preview that keeps identity over time). With a model trace (one forward pass,
-/// `dynscope trace`), levels, voxels, neighbour lists and the learned filter weights are the
-/// model's own, exactly as its forward pass at the trace's frame saw them; level layers and
-/// neighbourhoods then exist at that frame only.
+/// Levels, voxels, neighbour lists and interaction points are the model's own and are handed in
+/// as a ModelTrace: one forward pass (`dynscope trace`, with the learned filter weights), or a
+/// level view (engine/rollout/level_view.h: the hierarchy the model builds, no forward pass).
+/// They exist at the trace's frame only. Without one, only level 0 (the sampled points) can be
+/// drawn; nothing here re-derives the hierarchy or searches neighbours.
 class SceneRenderData {
  public:
   /// Copies `scene` (validated; throws ValueError) and prepares what `view` asks for. A `trace`
   /// must have the view's level (ValueError "level") and a frame of the scene (ValueError
-  /// "trace").
+  /// "trace"); without one the view's level must be 0 (ValueError "level").
   SceneRenderData(const Scene& scene, const ViewSpec& view,
                   std::shared_ptr<const ModelTrace> trace = nullptr);
 
+  /// Replaces the trace or level view the levels come from (e.g. the level view of another
+  /// frame); throws as the constructor does for it, and ValueError for null.
+  void set_levels(std::shared_ptr<const ModelTrace> trace);
+
   int num_frames() const { return scene_.num_frames(); }
   const Scene& scene() const { return scene_; }
+  /// U-Net level the data shows.
+  int level() const { return level_; }
   /// Level-0 voxel edge used (view's, or default_sampling_voxel of the scenario).
   double voxel() const { return voxel_; }
-  /// Voxel edge of the view's level: voxel * 1.5^level (DESIGN §5).
+  /// Voxel edge of the view's level: the trace's (level ≥ 1), else the sampling voxel.
   double level_voxel() const;
-  /// Relational radius of the view's level (view's level-0 radius or 2 x voxel, times 1.5^level).
+  /// Relational radius of the view's level from the trace, 0 without one.
   double level_radius() const;
   /// Sphere radius used for points (view's, or 0.3 x level voxel).
   float point_radius() const;
   /// All level-0 points (identity kept over frames), `[N]` with object ids.
   const ScenePointCloud& cloud() const { return cloud_; }
-  /// Indices into cloud() of the view's level (all points at level 0).
-  const std::vector<int32_t>& level_indices() const { return level_indices_; }
   /// Bounds of every object over frames [first, last] (inclusive).
   Aabb bounds(int first, int last) const;
 
-  /// The model trace the levels come from, or null.
+  /// The model trace or level view the levels come from, or null.
   const ModelTrace* trace() const { return trace_.get(); }
-  /// Number of points of the view's level.
-  int level_size() const { return static_cast<int>(level_object_.size()); }
+  /// Number of points of the view's level (the cloud's at level 0 without a trace).
+  int level_size() const;
 
   /// The level's points at one frame and the neighbourhoods of one of them.
   struct LevelNeighbors {
@@ -66,20 +71,20 @@ class SceneRenderData {
     std::vector<int32_t> object;  ///< `[N_level]` object id per level point.
     NeighborList same;        ///< `[1,k]` same-object kNN of the picked point (itself included).
     NeighborList relational;  ///< `[1,k]` other-object kNN within level_radius().
-    /// Trace only: ‖h(p_k − p_0)‖ of the first traced PointConv over each list entry (`[k]`,
+    /// Forward-pass traces only: ‖h(p_k − p_0)‖ of the first traced PointConv over each list entry (`[k]`,
     /// 0 where masked), empty when the trace holds no filter weights for the point; the conv's
     /// module path.
     std::vector<double> same_weight, relational_weight;
     std::string same_conv, relational_conv;
-    /// Trace only, level ≥ 1: level−1 points pooled into the picked point (down list) and the
+    /// Level ≥ 1: level−1 points pooled into the picked point (down list) and the
     /// level−1 points whose upsampling reads it (up list), with their positions `[n,3]`.
     std::vector<int32_t> sources, feeds;
     Points source_positions = Points(0, 3), feed_positions = Points(0, 3);
   };
-  /// Neighbourhoods of level point `picked` at `frame` (what the view draws and the viewer lists).
-  /// With a trace the lists are the model's (k is its K) and `frame` must be the trace's.
-  /// Throws ValueError for a bad frame, point or k < 1.
-  LevelNeighbors level_neighbors(int frame, int picked, int k) const;
+  /// Neighbourhoods of level point `picked` at `frame` (what the view draws and the viewer lists):
+  /// the trace's lists (k is the model's K); `frame` must be the trace's. Throws ValueError for a
+  /// bad frame or point, and without a trace.
+  LevelNeighbors level_neighbors(int frame, int picked) const;
 
   /// The RenderScene of `frame` under `view` (same layers/level the data was built for; the
   /// picked point indexes the level's points). Throws ValueError for a bad frame or picked point.
@@ -89,26 +94,38 @@ class SceneRenderData {
 
  private:
   void add_neighborhoods(RenderScene& out, int frame, const ViewSpec& view) const;
-  /// Interaction points: the model's (sender → receiver pairs and their faces) from a mesh
-  /// trace at its frame, else found between the scene's meshes at the view radius.
+  /// Interaction points: the model's (sender → receiver pairs and their faces) from a mesh-input
+  /// trace at its frame; none for a model that reads points.
   void add_interaction_points(RenderScene& out, int frame) const;
   void add_trace_interaction_points(RenderScene& out, int frame) const;
 
   void check_trace_frame(int frame) const;
+  /// Throws ValueError(what) without a trace or level view.
+  void require_levels(const char* what) const;
 
   Scene scene_;
   std::shared_ptr<const ModelTrace> trace_;
   int level_ = 0;
   double voxel_ = 0.05;
-  double radius0_ = 0.1;
   float point_radius_ = 0.01f;
   std::vector<std::shared_ptr<MeshGeometry>> geometry_;  ///< Per object (rigid: local frame).
   ScenePointCloud cloud_;
-  std::vector<int32_t> level_indices_;
   std::shared_ptr<PointSeries> cloud_series_;  ///< Level-0 points, all frames.
   std::shared_ptr<PointSeries> level_series_;  ///< Level points, all frames.
   std::vector<int32_t> level_object_;          ///< Object id per level point.
 };
+
+/// True when `view` draws what only the model's hierarchy holds: a level above 0, a picked
+/// point's neighbourhoods, level-1+ voxels or interaction points.
+bool view_needs_levels(const ViewSpec& view);
+
+/// The model whose hierarchy `view` shows of `scene` when no trace is given: the scenario's scale
+/// preset (level_view_config), reading meshes when the view asks for interaction points (a model
+/// that reads points has none), else points.
+ModelConfig level_view_config(const Scene& scene, const ViewSpec& view);
+
+/// Level views of `scene` for `view` without a trace: level_view_config, the view's voxel.
+std::shared_ptr<LevelViews> make_level_views(const Scene& scene, const ViewSpec& view);
 
 /// True and predicted point sets of a rollout, `[T,N,3]` each, as two series built once; the
 /// prediction carries per-point errors |pred - truth| as scalars.

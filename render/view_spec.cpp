@@ -121,8 +121,6 @@ void ViewSpec::validate() const {
   if (point_radius < 0) throw ValueError("points.radius", "must be >= 0");
   parse_point_style(point_style);
   if (voxel < 0) throw ValueError("points.voxel", "must be >= 0");
-  if (neighbors < 1) throw ValueError("points.neighbors", "must be >= 1");
-  if (relation_radius < 0) throw ValueError("points.relation_radius", "must be >= 0");
   for (int k = 0; k < 3; ++k) {
     if (!(background[k] >= 0.0f && background[k] <= 1.0f)) {
       throw ValueError("background", "channels must be in [0, 1]");
@@ -161,9 +159,7 @@ json view_spec_to_json(const ViewSpec& v) {
   j["labels"] = v.labels;
   j["points"] = {{"radius", v.point_radius},
                  {"style", v.point_style},
-                 {"voxel", v.voxel},
-                 {"neighbors", v.neighbors},
-                 {"relation_radius", v.relation_radius}};
+                 {"voxel", v.voxel}};
   return j;
 }
 
@@ -242,8 +238,6 @@ ViewSpec view_spec_from_json(const json& j, const std::string& source) {
     r.read("radius", v.point_radius);
     r.read("style", v.point_style);
     r.read("voxel", v.voxel);
-    r.read("neighbors", v.neighbors);
-    r.read("relation_radius", v.relation_radius);
     r.warn_unknown();
   }
   top.warn_unknown();

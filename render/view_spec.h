@@ -49,9 +49,9 @@ struct ViewSpec {
   float point_radius = 0.0f;     ///< Sphere radius; 0 picks one from the voxel size.
   /// Point drawing: "auto" (flat discs above kDiscPointThreshold points), "spheres" or "discs".
   std::string point_style = "auto";
-  double voxel = 0.0;            ///< Level-0 grid voxel; 0 picks the paper's default per scale.
-  int neighbors = 16;            ///< K of the object kNN.
-  double relation_radius = 0.0;  ///< Relational radius at level 0; 0 means 2 x voxel.
+  /// Sampling voxel of the points (level 0); 0 picks the paper's default per scale. Levels,
+  /// neighbour counts and radii are the model's (its trace, or the level view of its config).
+  double voxel = 0.0;
 
   /// Throws ValueError naming the first bad field (sizes, frame, level, colormap, range, ...).
   void validate() const;

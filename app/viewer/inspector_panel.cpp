@@ -155,12 +155,15 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
   const SceneDocument& doc = state.document();
   if (frame >= doc.scene.num_frames()) return;
   const render::SceneRenderData& data = *state.active_data();
-  const PointInfo info = trace
-                             ? inspect_trace_point(*trace, doc.scene, view.level, view.picked_point)
-                             : inspect_point(data, view.picked_point, frame);
-  ImGui::Text("point %d of the %s of level %d, frame %d (%s point %d)", info.level_point,
-              pick_set_name(PickSet::kLevel), view.level, frame, trace ? "model" : "cloud",
-              info.cloud_point);
+  if (!data.trace()) {
+    ImGui::TextWrapped("Building the model's hierarchy at frame %d...", frame);
+    return;
+  }
+  const PointInfo info = inspect_point(data, view.picked_point, frame);
+  // A forward pass carries the learned filter weights; a level view only the lists.
+  const bool forward = trace && !is_level_view(*trace);
+  ImGui::Text("point %d of the %s of level %d, frame %d (model point %d)", info.level_point,
+              pick_set_name(PickSet::kLevel), view.level, frame, info.cloud_point);
   ImGui::SameLine();
   if (ImGui::SmallButton("clear")) {
     out.add([](ViewerState& s) { s.select_point(-1); });
@@ -168,33 +171,31 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
   }
   ImGui::Text("object   %d %s", info.object_id, info.object_name.c_str());
   ImGui::Text("position %s", format_vec(info.position).c_str());
-  if (!trace) {
+  if (info.has_velocity) {
     ImGui::Text("velocity %s  |v| %.3f", format_vec(info.velocity).c_str(), info.velocity.norm());
   }
-  if (trace) draw_trace_features(*trace, view.level, view.picked_point);
+  if (forward) draw_trace_features(*trace, view.level, view.picked_point);
   bool edges = view.layers.neighborhoods;
   if (ImGui::Checkbox("show edges", &edges)) {
     out.add([edges](ViewerState& s) { s.layers().neighborhoods = edges; });
   }
-  if (!trace) {
+  if (!forward) {
     ImGui::SameLine();
-    ImGui::SetNextItemWidth(110);
-    int k = view.neighbors;
-    if (ImGui::SliderInt("k", &k, 1, 32)) out.add([k](ViewerState& s) { s.set_neighbors(k); });
+    ImGui::TextColored(kMutedText, "(no checkpoint: lists only)");
   }
-  const Neighborhood n = point_neighborhood(data, view.picked_point, frame, view.neighbors);
+  const Neighborhood n = point_neighborhood(data, view.picked_point, frame);
   const bool weighted = state.trace_picked() == view.picked_point;
   const ImVec4 blue(0.35f, 0.6f, 1.0f, 1.0f), orange(1.0f, 0.6f, 0.15f, 1.0f);
   ImGui::TextColored(blue, "object kNN: %zu of k=%d (same object)", n.object.size(), n.k);
   if (!n.object_conv.empty()) ImGui::TextColored(kMutedText, "h of %s", n.object_conv.c_str());
-  neighbour_table("knn", n.object, blue, trace != nullptr);
+  neighbour_table("knn", n.object, blue, forward);
   ImGui::TextColored(orange, "relational: %zu within r=%.3g (other objects)", n.relational.size(),
                      n.radius);
   if (!n.relational_conv.empty()) {
     ImGui::TextColored(kMutedText, "h of %s", n.relational_conv.c_str());
   }
-  neighbour_table("rel", n.relational, orange, trace != nullptr);
-  if (trace && !weighted) ImGui::TextColored(kMutedText, "capturing filter weights...");
+  neighbour_table("rel", n.relational, orange, forward);
+  if (forward && !weighted) ImGui::TextColored(kMutedText, "capturing filter weights...");
   if (trace && trace->has_mesh) draw_trace_mesh(state, *trace, out);
 }
 

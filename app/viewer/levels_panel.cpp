@@ -1,6 +1,7 @@
 // Levels panel: the U-Net level shown, its points and voxels, and the hierarchy's counts.
 #include "app/viewer/panel_util.h"
 #include "app/viewer/panels.h"
+#include "render/scene_adapter.h"
 
 namespace dynscope::app::viewer {
 
@@ -27,13 +28,19 @@ void draw_levels_panel(const ViewerState& state, Actions& out) {
   if (view.frame >= doc.scene.num_frames()) return;
   const std::vector<LevelCount> counts = state.level_counts();
   if (const ModelTrace* trace = state.shown_trace()) {
-    ImGui::TextColored(kMutedText, "the model's own hierarchy (trace) at frame %d", trace->frame);
-  } else {
-    ImGui::TextColored(kMutedText, "model hierarchy (%s preset) at frame %d",
-                       hierarchy_preset(doc.scene).c_str(), view.frame);
-    if (!state.checkpoint().empty() && state.trace_job_frame() >= 0) {
+    if (is_level_view(*trace)) {
+      ImGui::TextColored(kMutedText, "the model's hierarchy (%s input, no checkpoint) at frame %d",
+                         to_string(render::level_view_config(doc.scene, view).input).c_str(),
+                         trace->frame);
+    } else {
+      ImGui::TextColored(kMutedText, "the model's own hierarchy (trace) at frame %d", trace->frame);
+    }
+  } else if (!state.checkpoint().empty()) {
+    if (state.trace_job_frame() >= 0) {
       ImGui::TextColored(kMutedText, "capturing the model's trace...");
     }
+  } else {
+    out.add([](ViewerState& s) { s.request_level_view(); });  // the counts below, next frame
   }
   const Scene& scene = doc.scene;
   const int columns = 3 + static_cast<int>(scene.objects.size());

@@ -4,9 +4,6 @@
 #include <algorithm>
 
 #include "engine/core/error.h"
-#include "engine/geometry/neighbors.h"
-#include "engine/model/hierarchy.h"
-#include "engine/model/model_config.h"
 #include "engine/rollout/metrics.h"
 #include "engine/rollout/model_points.h"
 
@@ -32,38 +29,61 @@ void check_frame(const Scene& scene, int frame) {
 
 Points level_positions(const render::SceneRenderData& data, int frame) {
   check_frame(data.scene(), frame);
-  const Points all = data.cloud().positions(data.scene(), frame);
-  const std::vector<int32_t>& idx = data.level_indices();
-  Points out(static_cast<Eigen::Index>(idx.size()), 3);
-  for (size_t i = 0; i < idx.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = all.row(idx[i]);
-  return out;
+  if (const ModelTrace* trace = data.trace()) {
+    if (frame != trace->frame) {
+      throw ValueError("frame", "the model's levels are of frame " + std::to_string(trace->frame) +
+                                    ", not " + std::to_string(frame));
+    }
+    return trace->levels[static_cast<size_t>(data.level())].points;
+  }
+  return data.cloud().positions(data.scene(), frame);
 }
 
 PointInfo inspect_point(const render::SceneRenderData& data, int level_point, int frame) {
   check_point(data, level_point);
   check_frame(data.scene(), frame);
   const Scene& scene = data.scene();
+  const ScenePointCloud& cloud = data.cloud();
   PointInfo info;
-  info.level_point = level_point;
-  info.cloud_point = data.level_indices()[level_point];
-  info.object_id = data.cloud().object_id[info.cloud_point];
-  info.object_name = scene.objects[data.cloud().object[info.cloud_point]].name;
+  int cloud_point = level_point;
+  if (const ModelTrace* trace = data.trace()) {
+    if (frame != trace->frame) {
+      throw ValueError("frame", "the model's levels are of frame " + std::to_string(trace->frame) +
+                                    ", not " + std::to_string(frame));
+    }
+    info = inspect_trace_point(*trace, scene, data.level(), level_point);
+    // The model's points are the sampled cloud when they coincide with it at the frame; then the
+    // point keeps its identity over frames and has a velocity.
+    cloud_point = -1;
+    const Points& model = trace->levels.front().points;
+    if (cloud.size() == model.rows() && info.cloud_point >= 0 &&
+        (cloud.positions(scene, frame).row(info.cloud_point) - model.row(info.cloud_point))
+                .norm() < 1e-9) {
+      cloud_point = info.cloud_point;
+    }
+  } else {
+    info.level_point = level_point;
+    info.cloud_point = level_point;
+    info.object_id = cloud.object_id[static_cast<size_t>(level_point)];
+    info.object_name = scene.objects[static_cast<size_t>(cloud.object[level_point])].name;
+    info.position = cloud.positions(scene, frame).row(level_point).transpose();
+  }
+  if (cloud_point < 0) return info;
   auto at = [&](int f) -> Vec3 {
-    return data.cloud().positions(scene, f).row(info.cloud_point).transpose();
+    return cloud.positions(scene, f).row(cloud_point).transpose();
   };
-  info.position = at(frame);
   const int prev = std::max(0, frame - 1), next = std::min(scene.num_frames() - 1, frame + 1);
   if (next > prev) info.velocity = (at(next) - at(prev)) / ((next - prev) * scene.dt_s);
+  info.has_velocity = true;
   return info;
 }
 
-Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_point, int frame,
-                                int k) {
+Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_point, int frame) {
   check_point(data, level_point);
   check_frame(data.scene(), frame);
-  const render::SceneRenderData::LevelNeighbors nb = data.level_neighbors(frame, level_point, k);
+  const render::SceneRenderData::LevelNeighbors nb = data.level_neighbors(frame, level_point);
   Neighborhood out;
-  out.k = k;
+  out.k = static_cast<int>(nb.same.index.cols());
   out.radius = data.level_radius();
   auto collect = [&](const NeighborList& list, const std::vector<double>& weights,
                      std::vector<NeighborEntry>& into) {
@@ -80,7 +100,6 @@ Neighborhood point_neighborhood(const render::SceneRenderData& data, int level_p
   collect(nb.relational, nb.relational_weight, out.relational);
   out.object_conv = nb.same_conv;
   out.relational_conv = nb.relational_conv;
-  if (data.trace() != nullptr) out.k = static_cast<int>(nb.same.index.cols());
   return out;
 }
 
@@ -93,27 +112,6 @@ std::vector<double> contact_distances(const Scene& scene, const ScenePointCloud&
     const Points p = cloud.positions(scene, f);
     out.push_back(
         min_distance(select_rows(p, cloud.object, target), select_rows(p, cloud.object, zone)));
-  }
-  return out;
-}
-
-std::string hierarchy_preset(const Scene& scene) { return default_scale_preset(scene.scenario); }
-
-std::vector<LevelCount> level_counts(const Scene& scene, const ScenePointCloud& cloud, int frame) {
-  check_frame(scene, frame);
-  const HierarchyOptions options =
-      HierarchyOptions::from_config(ModelConfig::preset(hierarchy_preset(scene)));
-  const Hierarchy h = build_hierarchy(cloud.positions(scene, frame), cloud.object_id, options);
-  std::vector<LevelCount> out;
-  for (int l = 0; l < h.num_levels(); ++l) {
-    const HierarchyLevel& level = h.levels[l];
-    LevelCount c;
-    c.level = l;
-    c.voxel = level.voxel;
-    c.radius = level.radius;
-    c.points = static_cast<int>(level.points.rows());
-    for (int32_t id : level.object_ids) ++c.per_object[id];
-    out.push_back(std::move(c));
   }
   return out;
 }

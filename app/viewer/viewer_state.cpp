@@ -92,11 +92,13 @@ void ViewerState::set_scene(const Scene& scene, const std::string& path) {
   build.layers.level_points = true;
   build.picked_point = -1;
   build.frame = 0;
+  build.level = 0;
   doc->data = std::make_unique<render::SceneRenderData>(doc->scene, build);
   doc->contact_distance = contact_distances(doc->scene, doc->data->cloud());
   replaced();
   doc_ = std::move(doc);
-  data_level_ = view_.level;
+  data_stale_ = false;
+  level_view_failed_ = -1;
   rollout_.reset();
   compare_.reset();
   trace_.reset();
@@ -132,7 +134,8 @@ void ViewerState::set_frame(int frame) {
   view_.frame = clamped;
   // Level points of a model trace are the hierarchy of one frame; only level-0 points (the
   // model's points) keep their index from frame to frame.
-  if (trace_frame() != traced && !checkpoint_.empty() && view_.level > 0) view_.picked_point = -1;
+  if (trace_frame() != traced && view_.level > 0 && !trace_from_file_) view_.picked_point = -1;
+  ensure_level_view();
 }
 
 int ViewerState::trace_frame() const {
@@ -158,6 +161,7 @@ void ViewerState::select_point(int point) {
   drawn_pick_ = Selection{};
   selection_marker_.reset();
   view_.picked_point = std::max(point, -1);
+  ensure_level_view();
 }
 
 void ViewerState::select(PickSet set, int point) {
@@ -209,23 +213,15 @@ Selection ViewerState::selection() const {
 
 int ViewerState::num_levels() const {
   // The model's own count: the trace's levels, else those of the config whose hierarchy the level
-  // browser previews for this scene.
+  // browser shows for this scene.
   if (trace_) return static_cast<int>(trace_->levels.size());
-  if (doc_) return ModelConfig::preset(hierarchy_preset(doc_->scene)).levels;
+  if (doc_) return level_view_config(doc_->scene).levels;
   return ModelConfig{}.levels;
 }
 
 std::vector<LevelCount> ViewerState::level_counts() const {
   if (const ModelTrace* trace = shown_trace()) return trace_level_counts(*trace);
-  if (!doc_ || view_.frame >= doc_->scene.num_frames()) return {};
-  auto cached = doc_->level_counts.find(view_.frame);
-  if (cached == doc_->level_counts.end()) {
-    cached = doc_->level_counts
-                 .emplace(view_.frame,
-                          viewer::level_counts(doc_->scene, doc_->data->cloud(), view_.frame))
-                 .first;
-  }
-  return cached->second;
+  return {};
 }
 
 void ViewerState::set_level(int level) {
@@ -514,13 +510,55 @@ void ViewerState::update_jobs() {
 }
 
 void ViewerState::ensure_render_data() {
-  if (!doc_ || (doc_->data && data_level_ == view_.level)) return;
-  render::ViewSpec build = view_;
-  build.layers.level_points = true;  // points are always prepared so they can be picked
-  build.picked_point = -1;
-  build.frame = 0;
-  doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
-  data_level_ = view_.level;
+  if (doc_ && (!doc_->data || data_stale_)) {
+    render::ViewSpec build = view_;
+    build.layers.level_points = true;  // points are always prepared so they can be picked
+    build.picked_point = -1;
+    build.frame = 0;
+    build.level = 0;
+    doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
+    // The sampling voxel may have changed: level views are drawn anew.
+    doc_->levels.reset();
+    if (trace_ && is_level_view(*trace_)) {
+      trace_.reset();
+      trace_data_.reset();
+    }
+    level_view_failed_ = -1;
+  }
+  data_stale_ = false;
+  ensure_level_view();
+}
+
+void ViewerState::ensure_level_view() {
+  const bool wanted = level_view_wanted_;
+  level_view_wanted_ = false;
+  if (!doc_ || !checkpoint_.empty() || trace_from_file_ ||
+      view_.frame >= doc_->scene.num_frames()) {
+    return;
+  }
+  if (!wanted && view_.picked_point < 0 && !render::view_needs_levels(view_)) return;
+  const ModelConfig config = render::level_view_config(doc_->scene, view_);
+  if (level_view_failed_ == view_.frame &&
+      (!doc_->levels || doc_->levels->config().input == config.input)) {
+    return;
+  }
+  std::shared_ptr<const ModelTrace> levels;
+  bool other_points = false;  // points of another input (mesh vertices vs samples)
+  try {
+    if (!doc_->levels || doc_->levels->config().input != config.input) {
+      other_points = doc_->levels != nullptr;
+      doc_->levels = render::make_level_views(doc_->scene, view_);
+    }
+    levels = doc_->levels->at(view_.frame);
+  } catch (...) {
+    level_view_failed_ = view_.frame;
+    // Mesh input fails on a scene it cannot read (deformable objects): the layer goes off.
+    view_.layers.interaction_points = false;
+    throw;
+  }
+  if (trace_ == levels && trace_level_ == view_.level) return;
+  install_trace(levels, view_.level, -1);
+  if (other_points || view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
 }
 
 }  // namespace dynscope::app::viewer

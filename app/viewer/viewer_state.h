@@ -14,6 +14,7 @@
 #include "app/viewer/model_services.h"
 #include "app/viewer/rollout_document.h"
 #include "app/viewer/scene_inspection.h"
+#include "engine/rollout/level_view.h"
 #include "engine/scene/scene.h"
 #include "render/scene_adapter.h"
 #include "render/view_spec.h"
@@ -55,15 +56,16 @@ struct WindowLayout {
   bool ui_visible = true;
 };
 
-/// A loaded scene and what is derived from it once (the GPU-facing SceneRenderData for the view's
-/// level, contact distances). A shown rollout lives beside it in a RolloutDocument.
+/// A loaded scene and what is derived from it once (the GPU-facing SceneRenderData of its sampled
+/// points, contact distances, the model's level views). A shown rollout lives beside it in a
+/// RolloutDocument.
 struct SceneDocument {
   std::string path;
   Scene scene;
-  std::unique_ptr<render::SceneRenderData> data;
+  std::unique_ptr<render::SceneRenderData> data;  ///< Level 0: the sampled points, every frame.
   std::vector<double> contact_distance;  ///< `[T]` target–zone minimum distance, or empty.
-  /// Model hierarchy counts per frame (cache filled by ViewerState::level_counts).
-  mutable std::map<int, std::vector<LevelCount>> level_counts;
+  /// The model's hierarchy at any frame when no checkpoint is used (built on first need).
+  std::shared_ptr<LevelViews> levels;
 };
 
 /// Everything the viewer shows and the jobs that feed it. Replacing a document (scene, rollout,
@@ -199,13 +201,15 @@ class ViewerState {
   void set_level(int level);
   /// Number of levels the browser offers (the model's, from its config or the trace).
   int num_levels() const;
-  /// Points per level and object of the hierarchy shown: the trace's at its frame, else the
-  /// model's hierarchy of the scene at the current frame (computed once per frame and cached).
+  /// Points per level and object of the hierarchy shown (the trace's or level view's at its
+  /// frame); empty while there is none.
   std::vector<LevelCount> level_counts() const;
+  /// Asks for the model's level view at the current frame on the next ensure_render_data even
+  /// when no layer needs it (the level browser's counts). Without a checkpoint the level view is
+  /// the hierarchy of the scenario's preset (render::level_view_config); with one, its trace.
+  void request_level_view() { level_view_wanted_ = true; }
   /// How points are drawn ("auto", "spheres", "discs"); throws ValueError for another name.
   void set_point_style(const std::string& style);
-  /// k of the preview neighbourhood (no trace).
-  void set_neighbors(int k) { view_.neighbors = k; }
   /// Colour range of the rollout's error colouring.
   void set_error_range(bool automatic, float lo, float hi);
   render::Camera& camera() { return view_.camera.camera; }
@@ -227,6 +231,9 @@ class ViewerState {
  private:
   void replaced();
   void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked);
+  /// Without a checkpoint or trace file: installs the level view of the current frame when the
+  /// view needs the model's hierarchy (or it was requested).
+  void ensure_level_view();
   void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
                          std::optional<Scene> what_if_scene);
   void reap_retired();
@@ -269,7 +276,9 @@ class ViewerState {
   Selection drawn_pick_;  ///< A selected rollout point (level points live in view_.picked_point).
   std::shared_ptr<render::PointSeries> selection_marker_;  ///< See selection_marker().
   render::ViewSpec view_;
-  int data_level_ = -1;  ///< Level doc_->data was built for.
+  bool data_stale_ = true;          ///< doc_->data and its level views need rebuilding.
+  bool level_view_wanted_ = false;  ///< See request_level_view().
+  int level_view_failed_ = -1;      ///< Frame whose level view failed (not retried), or -1.
   Timeline timeline_;
   WindowLayout layout_;
   std::map<Panel, bool> open_requests_;

@@ -32,17 +32,18 @@ void ViewerState::set_view(const render::ViewSpec& view) {
   }
   const render::ViewSpec previous = view_;
   view_ = view;
-  // Voxel, radius or point size may differ: rebuild the level data from scratch.
-  data_level_ = -1;
+  // Voxel or point size may differ: rebuild the level data from scratch.
+  data_stale_ = true;
   try {
     ensure_render_data();
-    if (doc_ && view_.picked_point >= doc_->data->level_size()) {
+    if (doc_ && (view_.picked_point != view.picked_point ||
+                 view_.picked_point >= active_data()->level_size())) {
       throw ValueError("picked_point",
                        std::to_string(view_.picked_point) + " is outside the level's points");
     }
   } catch (...) {
     view_ = previous;
-    data_level_ = -1;
+    data_stale_ = true;
     ensure_render_data();
     throw;
   }

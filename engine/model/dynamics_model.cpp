@@ -196,12 +196,7 @@ torch::Tensor DynamicsModelImpl::normalize_target(const torch::Tensor& target) c
 
 Hierarchy DynamicsModelImpl::build_hierarchy(const PointState& state) const {
   state.validate();
-  const HierarchyOptions options = HierarchyOptions::from_config(config_);
-  if (config_.input == InputMode::kMesh) {
-    if (state.faces.rows() == 0) throw ValueError("point_state", "mesh input needs faces");
-    return build_mesh_hierarchy(state.position, state.object_ids, state.faces, options);
-  }
-  return dynscope::build_hierarchy(state.position, state.object_ids, options);
+  return build_model_hierarchy(state.position, state.object_ids, state.faces, config_);
 }
 
 Points DynamicsModelImpl::predict_next(const PointState& state) {

@@ -197,4 +197,14 @@ const NeighborList& mesh_list(const MeshInteraction& mesh, MeshList list) {
 int mesh_list_query_level(MeshList list) { return list == MeshList::kVertexPoints ? 0 : -1; }
 int mesh_list_source_level(MeshList list) { return list == MeshList::kFaceVertices ? 0 : -1; }
 
+Hierarchy build_model_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
+                                const Faces& faces, const ModelConfig& config) {
+  const HierarchyOptions options = HierarchyOptions::from_config(config);
+  if (config.input == InputMode::kMesh) {
+    if (faces.rows() == 0) throw ValueError("faces", "mesh input needs faces");
+    return build_mesh_hierarchy(points, object_ids, faces, options);
+  }
+  return build_hierarchy(points, object_ids, options);
+}
+
 }  // namespace dynscope

@@ -96,4 +96,10 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
 Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t>& object_ids,
                                const Faces& faces, const HierarchyOptions& options);
 
+/// The hierarchy a model of `config` builds (one rule for the model, traces and level views):
+/// build_mesh_hierarchy over `faces` for mesh input (ValueError "faces" when there are none),
+/// else build_hierarchy; options from HierarchyOptions::from_config.
+Hierarchy build_model_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
+                                const Faces& faces, const ModelConfig& config);
+
 }  // namespace dynscope

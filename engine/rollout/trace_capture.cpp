@@ -6,16 +6,11 @@
 
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
+#include "engine/rollout/level_view.h"
 
 namespace dynscope {
 
 namespace {
-
-void add_list(std::vector<TraceList>& out, const std::string& name, const NeighborList& list,
-              int query_level, int source_level) {
-  if (list.rows() == 0 || list.k() == 0) return;
-  out.push_back({name, query_level, source_level, list.index, list.mask});
-}
 
 // One PointConv of the U-Net and where it reads: its query level, the list level/name, and the
 // tensors of its query points, source points and neighbour list.
@@ -103,35 +98,7 @@ ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& 
   std::vector<BlockRecord> records;
   model->forward(input, &records);
 
-  ModelTrace t;
-  t.model_config = model->config().to_json();
-  t.frame = frame;
-  for (int l = 0; l < h.num_levels(); ++l) {
-    const HierarchyLevel& src = h.levels[static_cast<size_t>(l)];
-    TraceLevel lv;
-    lv.points = src.points;
-    lv.object_ids = src.object_ids;
-    lv.kept = src.kept;
-    lv.voxel = src.voxel;
-    lv.radius = src.radius;
-    for (LevelList list : kLevelLists) {
-      add_list(lv.lists, level_list_name(list), level_list(src, list), list_query_level(list, l),
-               list_source_level(list, l));
-    }
-    t.levels.push_back(std::move(lv));
-  }
-  if (h.has_mesh) {
-    t.has_mesh = true;
-    t.mesh.faces = state.faces;
-    t.mesh.points = h.mesh.points;
-    t.mesh.face = h.mesh.face;
-    t.mesh.object_ids = h.mesh.object_ids;
-    // Levels here: −1 stands for the interaction points, 0 for the vertices.
-    for (MeshList list : kMeshLists) {
-      add_list(t.mesh.lists, mesh_list_name(list), mesh_list(h.mesh, list),
-               mesh_list_query_level(list), mesh_list_source_level(list));
-    }
-  }
+  ModelTrace t = hierarchy_trace(h, state.faces, frame, model->config());
   for (const BlockRecord& r : records) {
     const torch::Tensor n = r.features.pow(2).sum(1).sqrt().to(torch::kDouble).contiguous();
     t.features.push_back(

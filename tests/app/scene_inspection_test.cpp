@@ -6,6 +6,8 @@
 #include <set>
 
 #include "engine/core/error.h"
+#include "engine/model/model_config.h"
+#include "engine/rollout/level_view.h"
 
 namespace dynscope::app::viewer {
 namespace {
@@ -41,6 +43,12 @@ render::ViewSpec level_view(int level) {
   return v;
 }
 
+// The scene's data at `level` with the model's level view of `frame`.
+render::SceneRenderData with_levels(const Scene& s, int level, int frame) {
+  const render::ViewSpec v = level_view(level);
+  return render::SceneRenderData(s, v, render::make_level_views(s, v)->at(frame));
+}
+
 TEST(SceneInspection, VelocityIsTheFiniteDifferenceOfTheMotion) {
   const Scene s = two_boxes();
   const render::SceneRenderData data(s, level_view(0));
@@ -52,40 +60,55 @@ TEST(SceneInspection, VelocityIsTheFiniteDifferenceOfTheMotion) {
   }
   // The zone rests.
   int zone_point = -1;
-  for (size_t i = 0; i < data.level_indices().size(); ++i) {
-    if (data.cloud().object_id[data.level_indices()[i]] == 1) zone_point = static_cast<int>(i);
+  for (size_t i = 0; i < data.cloud().object_id.size(); ++i) {
+    if (data.cloud().object_id[i] == 1) zone_point = static_cast<int>(i);
   }
   ASSERT_GE(zone_point, 0);
   EXPECT_NEAR(inspect_point(data, zone_point, 2).velocity.norm(), 0.0, 1e-12);
   EXPECT_THROW(inspect_point(data, -1, 0), ValueError);
   EXPECT_THROW(inspect_point(data, 0, 5), ValueError);
+  // A level view's points are the sampled ones: the same velocity, at its frame only.
+  const render::SceneRenderData levels = with_levels(s, 0, 2);
+  const PointInfo viewed = inspect_point(levels, 0, 2);
+  EXPECT_TRUE(viewed.has_velocity);
+  EXPECT_NEAR((viewed.velocity - Vec3(1, 0, 0)).norm(), 0.0, 1e-9);
+  EXPECT_THROW(inspect_point(levels, 0, 3), ValueError);
 }
 
 TEST(SceneInspection, PositionFollowsTheFrame) {
   const Scene s = two_boxes();
-  const render::SceneRenderData data(s, level_view(1));
+  const render::SceneRenderData data(s, level_view(0));
   const Points p0 = level_positions(data, 0), p3 = level_positions(data, 3);
-  ASSERT_EQ(p0.rows(), static_cast<Eigen::Index>(data.level_indices().size()));
+  ASSERT_EQ(p0.rows(), static_cast<Eigen::Index>(data.cloud().size()));
   const PointInfo info = inspect_point(data, 0, 3);
   EXPECT_NEAR((info.position - p3.row(0).transpose()).norm(), 0.0, 1e-12);
   EXPECT_NEAR((p3.row(0) - p0.row(0)).x(), 0.3, 1e-9);  // 3 frames of 0.1 s at 1 unit/s
+  // Level 1 of the model's hierarchy at frame 3: its points, one of them the model point it kept.
+  const render::SceneRenderData level1 = with_levels(s, 1, 3);
+  const Points q = level_positions(level1, 3);
+  ASSERT_EQ(q.rows(), level1.level_size());
+  ASSERT_LT(q.rows(), p3.rows());
+  const PointInfo kept = inspect_point(level1, 0, 3);
+  EXPECT_NEAR((kept.position - q.row(0).transpose()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((p3.row(kept.cloud_point) - q.row(0)).norm(), 0.0, 1e-12);
+  EXPECT_THROW(level_positions(level1, 2), ValueError);
 }
 
 TEST(SceneInspection, NeighbourhoodIsTheObjectKnnAndRelationalRadius) {
   const Scene s = two_boxes();
   // Frame 4: the target (x = 0.4) is 0.4 from the zone's centre, its faces 0.2 apart.
-  const render::SceneRenderData data(s, level_view(0));
+  const render::SceneRenderData data = with_levels(s, 0, 4);
   const Points p = level_positions(data, 4);
-  std::vector<int32_t> ids;
-  for (int32_t i : data.level_indices()) ids.push_back(data.cloud().object_id[i]);
+  const std::vector<int32_t> ids = data.cloud().object_id;
   // The target point closest to the zone.
   int picked = -1;
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
     if (ids[i] == 0 && (picked < 0 || p(i, 0) > p(picked, 0))) picked = static_cast<int>(i);
   }
-  const int k = 6;
-  const Neighborhood n = point_neighborhood(data, picked, 4, k);
+  const int k = ModelConfig::preset("physion").k;  // the model's K, not a viewer setting
+  const Neighborhood n = point_neighborhood(data, picked, 4);
   EXPECT_EQ(n.k, k);
+  EXPECT_DOUBLE_EQ(n.radius, ModelConfig::preset("physion").radius);
   EXPECT_DOUBLE_EQ(n.radius, data.level_radius());
   ASSERT_FALSE(n.object.empty());
   EXPECT_LE(static_cast<int>(n.object.size()), k);
@@ -110,7 +133,9 @@ TEST(SceneInspection, NeighbourhoodIsTheObjectKnnAndRelationalRadius) {
   for (size_t i = 1; i < n.object.size(); ++i) {
     EXPECT_LE(n.object[i - 1].distance, n.object[i].distance);
   }
-  EXPECT_THROW(point_neighborhood(data, picked, 4, 0), ValueError);
+  EXPECT_THROW(point_neighborhood(data, picked, 3), ValueError) << "the view holds frame 4";
+  const render::SceneRenderData plain(s, level_view(0));
+  EXPECT_THROW(point_neighborhood(plain, picked, 4), ValueError) << "no level view";
 }
 
 TEST(SceneInspection, ContactDistanceTracksTheGap) {
@@ -132,12 +157,12 @@ TEST(SceneInspection, ContactDistanceTracksTheGap) {
 
 TEST(SceneInspection, LevelCountsShrinkAndSumPerObject) {
   const Scene s = two_boxes();
-  const render::SceneRenderData data(s, level_view(0));
-  EXPECT_EQ(hierarchy_preset(s), "physion");
+  const render::SceneRenderData data = with_levels(s, 0, 2);
+  EXPECT_EQ(level_view_config(s).to_json(), ModelConfig::preset("physion").to_json());
   Scene movi = s;
   movi.scenario = "movi-a";
-  EXPECT_EQ(hierarchy_preset(movi), "kubric");
-  const std::vector<LevelCount> counts = level_counts(s, data.cloud(), 2);
+  EXPECT_EQ(level_view_config(movi).to_json(), ModelConfig::preset("kubric").to_json());
+  const std::vector<LevelCount> counts = trace_level_counts(*data.trace());
   ASSERT_EQ(counts.size(), 4u);
   EXPECT_EQ(counts[0].points, static_cast<int>(data.cloud().size()));
   for (size_t l = 0; l < counts.size(); ++l) {
@@ -150,7 +175,7 @@ TEST(SceneInspection, LevelCountsShrinkAndSumPerObject) {
       EXPECT_GT(counts[l].voxel, 0.0);
     }
   }
-  EXPECT_THROW(level_counts(s, data.cloud(), 9), ValueError);
+  EXPECT_THROW(render::make_level_views(s, level_view(0))->at(9), ValueError);
 }
 
 }  // namespace

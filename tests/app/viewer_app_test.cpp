@@ -35,7 +35,7 @@ fs::path temp_dir(const std::string& name) {
 // The level point nearest the eye among those projecting into the free part of the window (not
 // under the panels), with its pixel: nothing can hide it.
 int visible_point(const ViewerApp& app, Vec3* pixel) {
-  const Points p = level_positions(*app.state().document().data, app.state().current_frame());
+  const Points p = level_positions(*app.state().active_data(), app.state().level_frame());
   int best = -1;
   for (Eigen::Index i = 0; i < p.rows(); ++i) {
     const Vec3 s = app.state().camera().project(p.row(i).transpose(), kWidth, kHeight);
@@ -190,7 +190,9 @@ TEST(ViewerApp, SavedViewRendersTheSameThroughTheRenderPath) {
   EXPECT_EQ(view.width, kWidth);
   EXPECT_FALSE(view.camera.fit);
   const Scene scene = read_scene(testing::collide_scene());
-  const render::SceneRenderData data(scene, view);
+  // As `dynscope render` draws it: the model's level view at the frame.
+  const render::SceneRenderData data(scene, view,
+                                     render::make_level_views(scene, view)->at(view.frame));
   render::GlContext& context = testing::osmesa(view.width, view.height);
   render::Renderer renderer(context, 4);
   const render::Image rendered =

@@ -249,7 +249,7 @@ TEST(ViewerRollout, TraceDrivesTheInspector) {
     app.frame();
   }
   ASSERT_FALSE(app.state().shown_trace()->queries.empty());
-  const Neighborhood n = point_neighborhood(*app.state().active_data(), 7, 12, 16);
+  const Neighborhood n = point_neighborhood(*app.state().active_data(), 7, 12);
   EXPECT_EQ(n.k, FakeModel::kK);
   EXPECT_EQ(n.object_conv, "unet.stem.0.object.conv");
   const TraceList& same = app.state().shown_trace()->levels[0].lists[0];

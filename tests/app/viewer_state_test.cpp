@@ -264,7 +264,7 @@ TEST(ViewerState, LevelsAndObservedFramesComeFromTheEngine) {
   EXPECT_EQ(s.num_levels(), ModelConfig{}.levels);
   EXPECT_EQ(s.observed_frames(), RolloutOptions{}.observed_frames);
   s.open_scene(testing::collide_scene());
-  const int levels = ModelConfig::preset(hierarchy_preset(s.document().scene)).levels;
+  const int levels = level_view_config(s.document().scene).levels;
   EXPECT_EQ(s.num_levels(), levels);
   s.set_level(levels - 1);
   EXPECT_THROW(s.set_level(levels), ValueError);

@@ -106,7 +106,6 @@ TEST(Golden, NeighbourhoodOverlay) {
   ViewSpec view;
   view.layers.ground_truth = true;
   view.layers.neighborhoods = true;
-  view.neighbors = 12;
   SceneRenderData probe(scene, view);
   // Pick the left box's point on its top edge next to the gap: visible from above, and close
   // enough to the right box for relational edges.
@@ -121,7 +120,8 @@ TEST(Golden, NeighbourhoodOverlay) {
     }
   }
   view.picked_point = picked;
-  SceneRenderData data(scene, view);
+  // The model's own lists at frame 0 (Physion preset: K = 16, relational radius 0.1).
+  SceneRenderData data(scene, view, make_level_views(scene, view)->at(0));
   Camera camera;
   camera.set_preset(ViewPreset::kIso);
   camera.fit(data.bounds(0, 0), static_cast<double>(kWidth) / kHeight, 0.9);

@@ -7,6 +7,9 @@
 #include <memory>
 
 #include "engine/core/error.h"
+#include "engine/model/hierarchy.h"
+#include "engine/rollout/level_view.h"
+#include "engine/rollout/model_points.h"
 #include "render_test_util.h"
 
 namespace dynscope::render {
@@ -29,36 +32,120 @@ TEST(SceneAdapter, MeshesFollowPosesAndGridSitsOnTheFloor) {
   EXPECT_THROW(data.frame(3, view), ValueError);
 }
 
-TEST(SceneAdapter, LevelsHaveFewerPointsAndNeighbourhoodsStartAtThePickedPoint) {
+TEST(SceneAdapter, LevelViewsAreTheModelsOwnHierarchy) {
   const Scene scene = testing::shapes_scene(2);
   ViewSpec view;
   view.layers.ground_truth = true;
   view.layers.level_points = true;
   view.layers.neighborhoods = true;
   view.picked_point = 0;
-  view.neighbors = 8;
-  SceneRenderData level0(scene, view);
   view.level = 2;
-  SceneRenderData level2(scene, view);
-  EXPECT_EQ(level0.level_indices().size(), static_cast<size_t>(level0.cloud().size()));
-  EXPECT_LT(level2.level_indices().size(), level0.level_indices().size());
-  EXPECT_GT(level2.level_indices().size(), 0u);
-  EXPECT_NEAR(level2.level_voxel(), 0.05 * 2.25, 1e-12);
+  ASSERT_TRUE(view_needs_levels(view));
+  const std::shared_ptr<LevelViews> views = make_level_views(scene, view);
+  const std::shared_ptr<const ModelTrace> at1 = views->at(1);
+  EXPECT_EQ(views->at(1), at1) << "the last frame's view is kept";
+  EXPECT_TRUE(is_level_view(*at1));
 
+  // Reference: the model's own rule on the model's own points at frame 1 (Physion preset).
+  const ModelConfig config = ModelConfig::preset("physion");
+  EXPECT_EQ(views->config().to_json(), level_view_config(scene, view).to_json());
+  const ModelPoints points = build_model_points(scene, SamplingOptions{});
+  const Hierarchy h = build_model_hierarchy(points.positions(scene, 1), points.cloud.object_id,
+                                            points.faces, config);
+  ASSERT_EQ(at1->levels.size(), static_cast<size_t>(config.levels));
+  for (int l = 0; l < h.num_levels(); ++l) {
+    const HierarchyLevel& want = h.levels[static_cast<size_t>(l)];
+    const TraceLevel& got = at1->levels[static_cast<size_t>(l)];
+    EXPECT_EQ(got.points, want.points) << "level " << l;
+    EXPECT_DOUBLE_EQ(got.voxel, want.voxel);
+    EXPECT_DOUBLE_EQ(got.radius, want.radius);
+    for (const TraceList& list : got.lists) {
+      for (LevelList which : kLevelLists) {
+        if (list.name != level_list_name(which)) continue;
+        EXPECT_EQ(list.index, level_list(want, which).index) << l << "/" << list.name;
+      }
+    }
+  }
+
+  SceneRenderData level2(scene, view, at1);
+  EXPECT_EQ(level2.level_size(), static_cast<int>(h.levels[2].points.rows()));
+  EXPECT_LT(level2.level_size(), static_cast<int>(level2.cloud().size()));
+  EXPECT_NEAR(level2.level_voxel(), config.voxel_at(2), 1e-12);
+  EXPECT_NEAR(level2.level_radius(), h.levels[2].radius, 1e-12);
   const RenderScene frame = level2.frame(1, view);
-  ASSERT_EQ(frame.lines.size(), 1u);
+  ASSERT_GE(frame.lines.size(), 1u);
   const LineSet& edges = frame.lines[0];
   ASSERT_GT(edges.positions.size(), 0u);
-  EXPECT_LE(edges.positions.size(), static_cast<size_t>(2 * 8 * 6));
-  const int32_t picked = level2.level_indices()[0];
-  const Points cloud1 = level2.cloud().positions(level2.scene(), 1);
+  const Points& p2 = h.levels[2].points;
   for (size_t s = 0; s < edges.positions.size(); s += 6) {
-    EXPECT_NEAR(edges.positions[s], cloud1(picked, 0), 1e-5);
-    EXPECT_NEAR(edges.positions[s + 2], cloud1(picked, 2), 1e-5);
+    EXPECT_NEAR(edges.positions[s], p2(0, 0), 1e-5);
+    EXPECT_NEAR(edges.positions[s + 2], p2(0, 2), 1e-5);
   }
+  // The neighbourhood is the model's list row: same-object kNN of K = config.k.
+  const auto nb = level2.level_neighbors(1, 0);
+  EXPECT_EQ(nb.same.index, h.levels[2].same.index.row(0));
+  EXPECT_EQ(nb.relational.index, h.levels[2].relational.index.row(0));
+  EXPECT_TRUE(nb.same_weight.empty()) << "a level view has no filter weights";
   EXPECT_FLOAT_EQ(frame.meshes[0].opacity, 0.3f);
-  view.picked_point = static_cast<int>(level2.level_indices().size());
+  // Another frame: that frame's level view.
+  level2.set_levels(views->at(0));
+  EXPECT_NO_THROW(level2.frame(0, view));
+  EXPECT_THROW(level2.frame(1, view), ValueError);
+  view.picked_point = level2.level_size();
   EXPECT_THROW(level2.frame(0, view), ValueError);
+}
+
+TEST(SceneAdapter, WithoutALevelViewOnlyTheSampledPointsAreDrawn) {
+  const Scene scene = testing::shapes_scene(2);
+  ViewSpec view;
+  view.layers.level_points = true;
+  SceneRenderData level0(scene, view);
+  EXPECT_EQ(level0.level_size(), static_cast<int>(level0.cloud().size()));
+  EXPECT_FALSE(view_needs_levels(view));
+  EXPECT_NO_THROW(level0.frame(1, view));
+  EXPECT_DOUBLE_EQ(level0.level_radius(), 0.0);
+  view.layers.neighborhoods = true;
+  view.picked_point = 0;
+  EXPECT_THROW(level0.frame(1, view), ValueError);
+  EXPECT_THROW(level0.level_neighbors(1, 0), ValueError);
+  view.picked_point = -1;
+  view.layers.interaction_points = true;
+  EXPECT_THROW(level0.frame(1, view), ValueError);
+  view.layers.interaction_points = false;
+  view.level = 1;
+  EXPECT_THROW(SceneRenderData(scene, view), ValueError);
+}
+
+TEST(SceneAdapter, InteractionPointsComeFromAMeshInputLevelView) {
+  const Scene scene = testing::shapes_scene(1);
+  ViewSpec view;
+  view.layers.interaction_points = true;
+  view.layers.level_points = true;
+  ASSERT_TRUE(view_needs_levels(view));
+  EXPECT_EQ(level_view_config(scene, view).input, InputMode::kMesh);
+  const std::shared_ptr<LevelViews> views = make_level_views(scene, view);
+  const std::shared_ptr<const ModelTrace> t = views->at(0);
+  ASSERT_TRUE(t->has_mesh);
+  SceneRenderData data(scene, view, t);
+  const RenderScene frame = data.frame(0, view);
+  bool drawn = false;
+  for (const PointLayer& p : frame.points) {
+    if (p.name == "interaction points") drawn = p.series->num_points == t->mesh.points.rows();
+  }
+  EXPECT_EQ(drawn, t->mesh.points.rows() > 0);
+  // A model that reads points has none: nothing drawn, and the legend says why.
+  view.layers.interaction_points = false;
+  const std::shared_ptr<const ModelTrace> points = make_level_views(scene, view)->at(0);
+  view.layers.interaction_points = true;
+  SceneRenderData point_data(scene, view, points);
+  for (const PointLayer& p : point_data.frame(0, view).points) {
+    EXPECT_NE(p.name, "interaction points");
+  }
+  bool said = false;
+  for (const std::string& line : point_data.legend(view)) {
+    said |= line.find("no interaction points") != std::string::npos;
+  }
+  EXPECT_TRUE(said);
 }
 
 TEST(SceneAdapter, VoxelBoxesHaveTheLevelVoxelSize) {
@@ -66,7 +153,7 @@ TEST(SceneAdapter, VoxelBoxesHaveTheLevelVoxelSize) {
   ViewSpec view;
   view.layers.voxels = true;
   view.level = 1;
-  SceneRenderData data(scene, view);
+  SceneRenderData data(scene, view, make_level_views(scene, view)->at(0));
   const RenderScene frame = data.frame(0, view);
   ASSERT_FALSE(frame.boxes.empty());
   for (const WireBox& b : frame.boxes) {
@@ -130,7 +217,7 @@ TEST(SceneAdapter, TraceGivesTheModelsLevelsListsAndFilterWeights) {
   view.picked_point = 0;
   SceneRenderData level0(scene, view, trace);
   EXPECT_EQ(level0.level_size(), 4);
-  const auto nb = level0.level_neighbors(1, 0, 16);
+  const auto nb = level0.level_neighbors(1, 0);
   ASSERT_EQ(nb.same.k(), 2);
   EXPECT_EQ(nb.same.index(0, 1), 1);
   ASSERT_EQ(nb.relational.k(), 1);
@@ -162,10 +249,10 @@ TEST(SceneAdapter, TraceGivesTheModelsLevelsListsAndFilterWeights) {
   SceneRenderData level1(scene, view, trace);
   EXPECT_EQ(level1.level_size(), 2);
   EXPECT_DOUBLE_EQ(level1.level_voxel(), 0.3);
-  const auto nb1 = level1.level_neighbors(1, 0, 16);
+  const auto nb1 = level1.level_neighbors(1, 0);
   EXPECT_EQ(nb1.sources, (std::vector<int32_t>{0, 1, 2}));
   EXPECT_EQ(nb1.feeds, (std::vector<int32_t>{0, 1, 2}));
-  EXPECT_EQ(level1.level_neighbors(1, 1, 16).feeds, (std::vector<int32_t>{3}));
+  EXPECT_EQ(level1.level_neighbors(1, 1).feeds, (std::vector<int32_t>{3}));
   // Voxel boxes sit on the model's grid, anchored at (min x, min y, 0) of the level-0 points.
   const RenderScene f1 = level1.frame(1, view);
   ASSERT_EQ(f1.boxes.size(), 2u);

@@ -43,7 +43,7 @@ TEST(ViewSpec, SaveLoadRoundTripKeepsEveryField) {
   v.level = 2;
   v.labels = false;
   v.point_radius = 0.03f;
-  v.neighbors = 8;
+  v.voxel = 0.04;
   const std::string path = (fs::temp_directory_path() / "dynscope_view_roundtrip.json").string();
   save_view_spec(v, path);
   const ViewSpec back = load_view_spec(path);
