@@ -18,6 +18,20 @@
 
 namespace dynscope::app {
 
+namespace {
+std::vector<std::string>& stored_command_line() {
+  static std::vector<std::string> line;
+  return line;
+}
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  stored_command_line().assign(argv, argv + argc);
+}
+
+const std::vector<std::string>& command_line() { return stored_command_line(); }
+
+
 std::string format_aabb(const Aabb& box) {
   if (box.empty()) return "empty";
   char buf[160];

@@ -18,6 +18,10 @@ namespace dynscope::app {
 
 /// "[x0, y0, z0] .. [x1, y1, z1]" with 3 decimals, or "empty".
 std::string format_aabb(const Aabb& box);
+
+/// The process's command line as main() received it (for launchers that restart the program).
+void set_command_line(int argc, char** argv);
+const std::vector<std::string>& command_line();
 /// Throws IoError if `path` does not exist or is not a regular readable file.
 void require_readable_file(const std::string& path);
 

@@ -1,12 +1,16 @@
 // `dynscope eval`: point error and contact accuracy of a checkpoint over a dataset split.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "app/cli_util.h"
 #include "app/commands.h"
+#include "app/distributed_cli.h"
 #include "engine/core/error.h"
 #include "engine/core/progress.h"
 #include "engine/io/temp_file.h"
@@ -31,7 +35,61 @@ struct EvalArgs {
   bool threshold_given = false;
   bool no_baseline = false;
   int threads = 0;
+  DistributedArgs dist;
 };
+
+// One rank of a data-parallel evaluation: scenes i with i mod W = rank; rank 0 gathers every
+// rank's results and summarises them in split order (the same numbers as one process).
+void run_eval_rank(const EvalArgs& args, const DistributedOptions& dist, const DatasetSplit& split,
+                   const LoadedModel& model, const EvalOptions& options) {
+  ProcessGroup group(dist);
+  const int world = group.world_size();
+  if (group.rank() == 0) {
+    std::printf("distributed: %s backend, world size %d: %zu scenes shared out\n",
+                group.backend().c_str(), world, split.items.size());
+    std::fflush(stdout);
+  }
+  nlohmann::json mine = {{"voxel", 0.0}, {"threshold", 0.0}, {"scenes", nlohmann::json::array()}};
+  std::unique_ptr<Progress> progress;
+  const int64_t share =
+      (static_cast<int64_t>(split.items.size()) - group.rank() + world - 1) / world;
+  if (group.rank() == 0) progress = std::make_unique<Progress>("eval " + args.split, share);
+  for (size_t i = static_cast<size_t>(group.rank()); i < split.items.size();
+       i += static_cast<size_t>(world)) {
+    double voxel = 0.0, threshold = 0.0;
+    const SceneEvaluation e = evaluate_scene(split.items[i], model.predict, options, &voxel,
+                                             &threshold);
+    mine["voxel"] = voxel;
+    mine["threshold"] = threshold;
+    mine["scenes"].push_back({{"index", i}, {"result", scene_evaluation_to_json(e)}});
+    if (progress) progress->advance();
+  }
+  if (progress) progress->finish();
+  const std::vector<std::string> all = group.gather_bytes("evaluations", mine.dump());
+  if (group.rank() != 0) return;
+  std::vector<SceneEvaluation> scenes(split.items.size());
+  std::vector<bool> have(split.items.size(), false);
+  double voxel = 0.0, threshold = 0.0;
+  for (const std::string& text : all) {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    if (!j.at("scenes").empty()) {
+      voxel = j.at("voxel").get<double>();
+      threshold = j.at("threshold").get<double>();
+    }
+    for (const nlohmann::json& s : j.at("scenes")) {
+      const size_t i = s.at("index").get<size_t>();
+      scenes.at(i) = scene_evaluation_from_json(s.at("result").get<std::string>());
+      have.at(i) = true;
+    }
+  }
+  if (std::find(have.begin(), have.end(), false) != have.end()) {
+    throw Error("data-parallel evaluation: a rank's scenes are missing from the gathered results");
+  }
+  const EvalSummary summary =
+      summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
+  std::fputs(eval_table(summary).c_str(), stdout);
+  if (!args.json.empty()) write_text_file_atomically(args.json, eval_to_json(summary));
+}
 
 void run_eval(const EvalArgs& args) {
   require_int_in_range("--observed", args.observed, 3, kMaxFrameOption);
@@ -50,6 +108,12 @@ void run_eval(const EvalArgs& args) {
   for (const DatasetItem& item : split.items) inputs.push_back({"dataset scene", item.path});
   require_output_directory("--json", args.json);
   require_distinct_output("--json", args.json, inputs);
+  const int ranks = args.dist.nproc * args.dist.nnodes;
+  if (!rank_environment() && ranks > 1) {
+    launch_command_ranks(args.dist, args.dist.nproc, args.dist.cmd->count("--threads") > 0,
+                         args.threads);
+    return;
+  }
   set_torch_threads(args.threads);
   const LoadedModel model = load_model(args.checkpoint);
   EvalOptions options;
@@ -59,6 +123,10 @@ void run_eval(const EvalArgs& args) {
   options.contact_threshold = args.threshold;
   options.threshold_fraction = args.threshold_fraction;
   options.baseline = !args.no_baseline;
+  if (const std::optional<DistributedOptions> dist = rank_environment()) {
+    run_eval_rank(args, *dist, split, model, options);
+    return;
+  }
   Progress progress("eval " + args.split, static_cast<int64_t>(split.items.size()));
   const EvalSummary summary = evaluate_split(split, model.predict, options, &progress);
   progress.finish();
@@ -76,7 +144,9 @@ void add_eval_command(CLI::App& app) {
       "the rollout (and per frame), Physion-style contact accuracy (contact predicted when the\n"
       "minimum target-zone point distance falls below the threshold in any frame, observed\n"
       "frames included), next to a physics-free constant-velocity-plus-gravity baseline\n"
-      "(Kabsch-rigidified, floor clamp at z = 0) and the threshold rule applied to ground truth.");
+      "(Kabsch-rigidified, floor clamp at z = 0) and the threshold rule applied to ground truth.\n"
+      "--nproc N shares the scenes out over N ranks (c10d, like `train --nproc`); rank 0\n"
+      "gathers one result, identical to a single process's.");
   cmd->add_option("--checkpoint", args->checkpoint, "Checkpoint written by `dynscope train`")
       ->required();
   cmd->add_option("--data", args->data, "Dataset directory (with manifest.json)")->required();
@@ -97,6 +167,7 @@ void add_eval_command(CLI::App& app) {
   cmd->add_flag("--no-baseline", args->no_baseline, "Skip the constant-velocity baseline");
   cmd->add_option("--threads", args->threads, "LibTorch threads (0: default)")
       ->capture_default_str();
+  add_distributed_options(cmd, args->dist, "evaluation (scenes shared out, one result)");
   cmd->callback([args] { run_eval(*args); });
 }
 

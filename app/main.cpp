@@ -3,11 +3,13 @@
 #include <exception>
 #include <iostream>
 
+#include "app/cli_util.h"
 #include "app/commands.h"
 #include "engine/core/log.h"
 #include "engine/model/torch_runtime.h"
 
 int main(int argc, char** argv) {
+  dynscope::app::set_command_line(argc, argv);
   // One compute-thread budget for LibTorch, OpenBLAS and our loops unless a command's --threads
   // asks for more (engine/core/threads.h says why the default is one thread).
   dynscope::set_torch_threads(0);

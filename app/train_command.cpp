@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -13,7 +14,11 @@
 
 #include "app/cli_util.h"
 #include "app/commands.h"
+#include "app/distributed_cli.h"
 #include "engine/core/error.h"
+#include "engine/core/log.h"
+#include "engine/core/threads.h"
+#include "engine/train/process_group.h"
 #include "engine/train/trainer.h"
 
 namespace dynscope::app {
@@ -30,6 +35,7 @@ struct TrainArgs {
   double lr = 0, noise_std = -1, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
   bool resume = false;
+  DistributedArgs dist;
   CLI::App* cmd = nullptr;
 };
 
@@ -108,10 +114,7 @@ void generate_missing_datasets(const TrainOptions& options) {
   }
 }
 
-void run_train(const TrainArgs& args) {
-  const TrainOptions options = build_options(args);
-  generate_missing_datasets(options);
-  const TrainResult r = train_model(options, /*show_progress=*/true);
+void print_summary(const TrainResult& r, const TrainOptions& options) {
   std::printf("trained %lld steps (%lld per epoch, started at %lld), last loss %.5g; wrote %s\n",
               static_cast<long long>(r.steps), static_cast<long long>(r.steps_per_epoch),
               static_cast<long long>(r.start_step), r.last_loss, options.out.c_str());
@@ -124,6 +127,48 @@ void run_train(const TrainArgs& args) {
       std::printf("  val loss %.5g  val rollout error %.4f\n", e.val_loss, e.val_rollout_error);
     }
   }
+  if (r.world_size > 1 && !r.losses.empty()) {
+    const double n = static_cast<double>(r.losses.size());
+    std::printf("  %d ranks: %.3f s per step, of which %.2f ms in the gradient all-reduce\n",
+                r.world_size, r.train_seconds / n, 1e3 * r.allreduce_seconds / n);
+  }
+}
+
+// One rank of a data-parallel job (started by the launcher, torchrun-style env, or srun).
+void run_rank(const TrainOptions& options, const DistributedOptions& dist) {
+  ProcessGroup group(dist);
+  if (group.rank() == 0) {
+    std::printf("distributed: %s backend, world size %d, rendezvous %s:%d\n",
+                group.backend().c_str(), group.world_size(), dist.master_addr.c_str(),
+                dist.master_port);
+    std::fflush(stdout);
+  }
+  const TrainResult r = train_model(options, /*show_progress=*/group.rank() == 0, &group);
+  if (group.rank() == 0) print_summary(r, options);
+}
+
+void run_train(const TrainArgs& args) {
+  const TrainOptions options = build_options(args);
+  if (const std::optional<DistributedOptions> dist = rank_environment()) {
+    run_rank(options, *dist);
+    return;
+  }
+  // A recipe of a data-parallel run is repeated with as many ranks unless --nproc says otherwise.
+  const int nnodes = args.dist.nnodes;
+  const int nproc =
+      args.dist.nproc_given() ? args.dist.nproc : std::max(1, options.world_size / nnodes);
+  if (!args.recipe.empty() && options.world_size != nproc * nnodes) {
+    log_warn("train: the recipe's run had ", options.world_size, " rank(s) (effective batch ",
+             static_cast<int64_t>(options.batch) * options.world_size, "); this one has ",
+             nproc * nnodes, " (effective batch ",
+             static_cast<int64_t>(options.batch) * nproc * nnodes, ")");
+  }
+  generate_missing_datasets(options);
+  if (nproc * nnodes > 1) {
+    launch_command_ranks(args.dist, nproc, given(args, "--threads"), options.threads);
+    return;
+  }
+  print_summary(train_model(options, /*show_progress=*/true), options);
 }
 
 }  // namespace
@@ -138,7 +183,12 @@ void add_train_command(CLI::App& app) {
       "A recipe's \"datasets\" list is generated first when a directory has no manifest, so\n"
       "`dynscope train --recipe assets/recipes/NAME.json` reproduces a shipped checkpoint.\n"
       "Defaults follow the paper's supplement by dataset scale (movi-* = kubric: lr 5e-3,\n"
-      "15 epochs, each scene sampled 2x per epoch; otherwise physion: lr 1e-3, 30 epochs, 8x).");
+      "15 epochs, each scene sampled 2x per epoch; otherwise physion: lr 1e-3, 30 epochs, 8x).\n"
+      "Data-parallel: --nproc N starts N ranks on this machine (c10d TCPStore rendezvous on\n"
+      "loopback, Gloo all-reduce of the gradients; each rank trains on --batch examples of a\n"
+      "step, so the effective batch is N x --batch). Several machines: the same command on\n"
+      "each with --nnodes, --node-rank, --master-addr and --master-port, or one process per\n"
+      "rank with the torchrun variables MASTER_ADDR, MASTER_PORT, RANK, WORLD_SIZE set.");
   a->cmd = cmd;
   cmd->add_option("--recipe", a->recipe, "JSON file of options; command-line options override it");
   cmd->add_option("--data", a->data,
@@ -177,6 +227,7 @@ void add_train_command(CLI::App& app) {
                   "Initial point sampling voxel (default 0.2 for movi-*, 0.05 otherwise)");
   cmd->add_option("--val-scenes", a->val_scenes, "Validation scenes per epoch (default 4)");
   cmd->add_option("--val-frames", a->val_frames, "Frames of the validation rollout (default 8)");
+  add_distributed_options(cmd, a->dist, "training");
   cmd->callback([a] { run_train(*a); });
 }
 

@@ -78,55 +78,115 @@ Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
                      options);
 }
 
-EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
-                           const EvalOptions& options, Progress* progress) {
+SceneEvaluation evaluate_scene(const DatasetItem& item, const StepPredictor& model,
+                               const EvalOptions& options, double* voxel, double* threshold) {
+  try {
+    const Scene scene = read_scene(item.path);
+    const ModelPoints points = build_model_points(scene, options.sampling);
+    const double contact = options.contact_threshold > 0
+                               ? options.contact_threshold
+                               : options.threshold_fraction * points.voxel;
+    if (voxel) *voxel = points.voxel;
+    if (threshold) *threshold = contact;
+    RolloutOptions ro;
+    ro.observed_frames = options.observed_frames;
+    const Rollout m = run_rollout(scene, points, model, ro);
+    SceneEvaluation e;
+    e.file = item.file;
+    e.scenario = scene.scenario;
+    e.frames = m.num_frames();
+    e.label = scene_label(scene, item.outcome);
+    e.model_curve = m.point_error;
+    e.has_contact = m.has_contact();
+    if (e.has_contact) {
+      e.truth_contact = contact_predicted(m.contact_distance_truth, contact);
+      e.model_contact = contact_predicted(m.contact_distance_predicted, contact);
+      e.truth_min_distance = min_of(m.contact_distance_truth);
+      e.model_min_distance = min_of(m.contact_distance_predicted);
+    }
+    if (options.baseline) {
+      const Rollout b = run_baseline_rollout(scene, points, ro);
+      e.baseline_curve = b.point_error;
+      if (e.has_contact) {
+        e.baseline_contact = contact_predicted(b.contact_distance_predicted, contact);
+        e.baseline_min_distance = min_of(b.contact_distance_predicted);
+      }
+    }
+    return e;
+  } catch (const IoError&) {
+    throw;
+  } catch (const Error& e) {
+    throw Error(item.path + ": " + e.what());
+  }
+}
+
+EvalSummary summarize_evaluation(const DatasetSplit& split, const EvalOptions& options,
+                                 std::vector<SceneEvaluation> scenes, double voxel,
+                                 double threshold) {
   EvalSummary out;
   out.dir = split.dir;
   out.split = split.split;
   out.observed_frames = options.observed_frames;
-  for (const DatasetItem& item : split.items) {
-    try {
-      const Scene scene = read_scene(item.path);
-      const ModelPoints points = build_model_points(scene, options.sampling);
-      out.voxel = points.voxel;
-      out.threshold = options.contact_threshold > 0 ? options.contact_threshold
-                                                    : options.threshold_fraction * points.voxel;
-      RolloutOptions ro;
-      ro.observed_frames = options.observed_frames;
-      const Rollout m = run_rollout(scene, points, model, ro);
-      SceneEvaluation e;
-      e.file = item.file;
-      e.scenario = scene.scenario;
-      e.frames = m.num_frames();
-      e.label = scene_label(scene, item.outcome);
-      e.model_curve = m.point_error;
-      e.has_contact = m.has_contact();
-      if (e.has_contact) {
-        e.truth_contact = contact_predicted(m.contact_distance_truth, out.threshold);
-        e.model_contact = contact_predicted(m.contact_distance_predicted, out.threshold);
-        e.truth_min_distance = min_of(m.contact_distance_truth);
-        e.model_min_distance = min_of(m.contact_distance_predicted);
-      }
-      if (options.baseline) {
-        const Rollout b = run_baseline_rollout(scene, points, ro);
-        e.baseline_curve = b.point_error;
-        if (e.has_contact) {
-          e.baseline_contact = contact_predicted(b.contact_distance_predicted, out.threshold);
-          e.baseline_min_distance = min_of(b.contact_distance_predicted);
-        }
-      }
-      accumulate(out.scenarios[e.scenario], e);
-      accumulate(out.scenarios["all"], e);
-      out.scenes.push_back(std::move(e));
-    } catch (const IoError&) {
-      throw;
-    } catch (const Error& e) {
-      throw Error(item.path + ": " + e.what());
-    }
-    if (progress) progress->advance();
+  out.voxel = voxel;
+  out.threshold = threshold;
+  for (SceneEvaluation& e : scenes) {
+    accumulate(out.scenarios[e.scenario], e);
+    accumulate(out.scenarios["all"], e);
+    out.scenes.push_back(std::move(e));
   }
   for (auto& [name, s] : out.scenarios) finish(s);
   return out;
+}
+
+EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
+                           const EvalOptions& options, Progress* progress) {
+  std::vector<SceneEvaluation> scenes;
+  double voxel = 0.0, threshold = 0.0;
+  for (const DatasetItem& item : split.items) {
+    scenes.push_back(evaluate_scene(item, model, options, &voxel, &threshold));
+    if (progress) progress->advance();
+  }
+  return summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
+}
+
+std::string scene_evaluation_to_json(const SceneEvaluation& e) {
+  const nlohmann::json j = {{"file", e.file},
+                            {"scenario", e.scenario},
+                            {"frames", e.frames},
+                            {"label", e.label},
+                            {"model_curve", e.model_curve},
+                            {"baseline_curve", e.baseline_curve},
+                            {"has_contact", e.has_contact},
+                            {"truth_contact", e.truth_contact},
+                            {"model_contact", e.model_contact},
+                            {"baseline_contact", e.baseline_contact},
+                            {"model_min_distance", e.model_min_distance},
+                            {"baseline_min_distance", e.baseline_min_distance},
+                            {"truth_min_distance", e.truth_min_distance}};
+  return j.dump();
+}
+
+SceneEvaluation scene_evaluation_from_json(const std::string& text) {
+  SceneEvaluation e;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    e.file = j.at("file").get<std::string>();
+    e.scenario = j.at("scenario").get<std::string>();
+    e.frames = j.at("frames").get<int>();
+    e.label = j.at("label").get<int>();
+    e.model_curve = j.at("model_curve").get<std::vector<double>>();
+    e.baseline_curve = j.at("baseline_curve").get<std::vector<double>>();
+    e.has_contact = j.at("has_contact").get<bool>();
+    e.truth_contact = j.at("truth_contact").get<bool>();
+    e.model_contact = j.at("model_contact").get<bool>();
+    e.baseline_contact = j.at("baseline_contact").get<bool>();
+    e.model_min_distance = j.at("model_min_distance").get<double>();
+    e.baseline_min_distance = j.at("baseline_min_distance").get<double>();
+    e.truth_min_distance = j.at("truth_min_distance").get<double>();
+  } catch (const nlohmann::json::exception& x) {
+    throw FormatError("scene evaluation", "json", x.what());
+  }
+  return e;
 }
 
 std::string eval_to_json(const EvalSummary& s) {

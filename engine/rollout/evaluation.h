@@ -77,6 +77,22 @@ extern const char* const kBaselineDescription;
 EvalSummary evaluate_split(const DatasetSplit& split, const StepPredictor& model,
                            const EvalOptions& options, Progress* progress = nullptr);
 
+/// One scene of a split, as evaluate_split does it; `voxel` and `threshold` (may be null) receive
+/// the sampling voxel and contact threshold used. Throws like evaluate_split.
+SceneEvaluation evaluate_scene(const DatasetItem& item, const StepPredictor& model,
+                               const EvalOptions& options, double* voxel, double* threshold);
+
+/// The summary of `scenes` (in split order) evaluated with `options`, `voxel` and `threshold`:
+/// what evaluate_split returns (data-parallel evaluation gathers the scenes of every rank).
+EvalSummary summarize_evaluation(const DatasetSplit& split, const EvalOptions& options,
+                                 std::vector<SceneEvaluation> scenes, double voxel,
+                                 double threshold);
+
+/// One scene's results as compact JSON and back (exact: doubles round-trip). The reader throws
+/// FormatError for anything else.
+std::string scene_evaluation_to_json(const SceneEvaluation& e);
+SceneEvaluation scene_evaluation_from_json(const std::string& text);
+
 /// The summary as indented JSON (every number, per scene and per scenario).
 std::string eval_to_json(const EvalSummary& summary);
 

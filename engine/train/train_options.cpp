@@ -84,6 +84,8 @@ std::string TrainOptions::to_json() const {
   j["epochs"] = epochs;
   j["samples_per_scene"] = samples_per_scene;
   j["batch"] = batch;
+  j["world_size"] = world_size;
+  j["effective_batch"] = static_cast<int64_t>(batch) * world_size;
   j["lr"] = lr;
   j["noise_std"] = noise_std;
   j["huber_delta"] = huber_delta;
@@ -166,6 +168,13 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     get("epochs", o.epochs);
     get("samples_per_scene", o.samples_per_scene);
     get("batch", o.batch);
+    get("world_size", o.world_size);
+    if (j.contains("effective_batch")) {
+      field = "effective_batch";
+      if (j["effective_batch"].get<int64_t>() != static_cast<int64_t>(o.batch) * o.world_size) {
+        throw ValueError("effective_batch", "must equal batch × world_size");
+      }
+    }
     get("lr", o.lr);
     get("noise_std", o.noise_std);
     get("huber_delta", o.huber_delta);
@@ -219,6 +228,7 @@ void TrainOptions::resolve(const std::string& scenario) {
   in_range("epochs", epochs, 1, 1e6, false);
   in_range("samples-per-scene", samples_per_scene, 1, 1e6, false);
   in_range("batch", batch, 1, 65536, false);
+  in_range("world_size", world_size, 1, 65536, false);
   in_range("lr", lr, 0, 10, true);
   in_range("huber-delta", huber_delta, 0, 1e6, true);
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);

@@ -41,7 +41,10 @@ struct TrainOptions {
   SamplingOptions sampling;   ///< Model points (input follows `model.input`).
   int epochs = 0;             ///< 0: 15 (kubric) / 30 (physion).
   int samples_per_scene = 0;  ///< N draws per training scene per epoch; 0: 2 / 8.
-  int batch = 1;              ///< Scenes (one random frame each) per optimiser step.
+  int batch = 1;              ///< Scenes (one random frame each) per optimiser step and rank.
+  int world_size = 1;         ///< Data-parallel ranks (`--nproc`); the effective batch is
+                              ///< batch × world_size (the same examples, steps and lr as one
+                              ///< process with that batch).
   double lr = 0.0;            ///< Adam learning rate; 0: 5e-3 / 1e-3.
   double noise_std = 3e-4;    ///< Std of the random-walk noise on input velocities (units/frame).
   double huber_delta = 1.0;   ///< Huber transition point in target-std units.

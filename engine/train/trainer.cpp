@@ -30,6 +30,7 @@
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
+#include "engine/train/process_group_torch.h"
 
 namespace dynscope {
 
@@ -102,6 +103,8 @@ struct PreparedBatch {
   ModelInput input;
   torch::Tensor truth;  // float64 [P,3]
   int64_t points = 0;
+  int64_t global_points = 0;  // points of the whole step over all ranks (normalises the loss)
+  bool empty = false;         // this rank has no example in the step (end of an epoch)
 };
 
 // Builds every example's hierarchy and tensors. Reads only the model's configuration, so it may
@@ -213,12 +216,13 @@ NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target)
 }
 
 void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t step,
-                const std::string& config_json) {
+                const std::string& config_json, int world_size) {
   TempFile temp(path);
   torch::serialize::OutputArchive archive;
   optimizer.save(archive);
   archive.write("step", c10::IValue(step));
   archive.write("config", c10::IValue(config_json));
+  archive.write("world_size", c10::IValue(static_cast<int64_t>(world_size)));
   try {
     archive.save_to(temp.path());
   } catch (const c10::Error& e) {
@@ -228,7 +232,7 @@ void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t 
 }
 
 int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
-                   const std::string& config_json) {
+                   const std::string& config_json, int world_size) {
   if (!std::filesystem::exists(path)) {
     throw IoError(path,
                   "training state missing; cannot --resume (was the run started with "
@@ -245,8 +249,29 @@ int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
                       "the state was saved for another architecture; start without --resume "
                       "or use the original options");
   }
+  c10::IValue saved_world;
+  const int64_t saved = archive.try_read("world_size", saved_world) ? saved_world.toInt() : 1;
+  if (saved != world_size) {
+    throw FormatError(path, "world_size",
+                      "the state was saved by a run of " + std::to_string(saved) +
+                          " rank(s); resume it with --nproc " + std::to_string(saved) +
+                          " (this run has " + std::to_string(world_size) + ")");
+  }
   optimizer.load(archive);
   return step.toInt();
+}
+
+// FNV-1a over the bytes of every parameter and buffer, in module order.
+uint64_t parameter_digest(DynamicsModel& model) {
+  uint64_t h = 1469598103934665603ULL;
+  auto add = [&h](const torch::Tensor& t) {
+    const torch::Tensor c = t.detach().contiguous();
+    const auto* p = static_cast<const unsigned char*>(c.data_ptr());
+    for (size_t i = 0; i < c.nbytes(); ++i) h = (h ^ p[i]) * 1099511628211ULL;
+  };
+  for (const torch::Tensor& t : model->parameters()) add(t);
+  for (const torch::Tensor& t : model->buffers()) add(t);
+  return h;
 }
 
 struct CsvLog {
@@ -269,8 +294,11 @@ struct CsvLog {
   }
 };
 
-TrainResult run(TrainOptions o, bool show_progress) {
+TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory given");
+  const int world = group ? group->world_size() : 1;
+  const int rank = group ? group->rank() : 0;
+  const bool leader = rank == 0;
   std::vector<DatasetSplit> train_splits, val_splits;
   for (const std::string& dir : o.data_dirs) {
     train_splits.push_back(read_dataset_split(dir, "train"));
@@ -286,6 +314,7 @@ TrainResult run(TrainOptions o, bool show_progress) {
                                    " together: their scenes have different scales");
     }
   }
+  o.world_size = world;
   o.resolve(train_splits.front().scenario);
   set_torch_threads(o.threads);
 
@@ -303,7 +332,8 @@ TrainResult run(TrainOptions o, bool show_progress) {
     }
     if (!any) break;
   }
-  if (val.empty()) {
+  if (!leader) val.clear();  // rank 0 validates
+  if (val.empty() && leader) {
     log_warn(o.data_dirs.front(),
              ": the validation split is empty (or --val-scenes 0); validation is skipped");
   }
@@ -315,25 +345,33 @@ TrainResult run(TrainOptions o, bool show_progress) {
   int64_t step = 0;
   if (o.resume) {
     load_checkpoint_weights(o.out, model);
-    step = load_state(train_state_path(o.out), optimizer, config_json);
-  } else {
+    step = load_state(train_state_path(o.out), optimizer, config_json, world);
+  } else if (leader) {
     model->set_stats(compute_stats(train, o.model.target));
+  }
+  if (group) {
+    // One model on every rank: rank 0's parameters and statistics (buffers).
+    std::vector<torch::Tensor> state = model->parameters();
+    for (const torch::Tensor& b : model->buffers()) state.push_back(b);
+    broadcast_tensors(*group, state, "the initial parameters");
   }
 
   const auto n_train = static_cast<int64_t>(train.size());
   const int64_t draws = n_train * o.samples_per_scene;
-  const int64_t steps_per_epoch = (draws + o.batch - 1) / o.batch;
+  const int64_t global_batch = static_cast<int64_t>(o.batch) * world;
+  const int64_t steps_per_epoch = (draws + global_batch - 1) / global_batch;
   int64_t total = steps_per_epoch * o.epochs;
   if (o.max_steps > 0) total = std::min(total, o.max_steps);
 
   TrainResult result;
   result.start_step = step;
   result.steps_per_epoch = steps_per_epoch;
-  CsvLog log(o.log_csv, o.resume);
-  write_text_file_atomically(recipe_path(o.out), o.to_json());
+  result.world_size = world;
+  CsvLog log(leader ? o.log_csv : std::string(), o.resume);
+  if (leader) write_text_file_atomically(recipe_path(o.out), o.to_json());
   const auto t0 = std::chrono::steady_clock::now();
   std::unique_ptr<Progress> progress;
-  if (show_progress) progress = std::make_unique<Progress>("train", total - step);
+  if (show_progress && leader) progress = std::make_unique<Progress>("train", total - step);
   auto seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
@@ -351,17 +389,31 @@ TrainResult run(TrainOptions o, bool show_progress) {
   };
   // The examples of step s: its slice of the epoch order, each with a random frame and noise, all
   // from seeds of (seed, epoch, s), so a resumed run draws exactly what an uninterrupted one does.
-  auto step_batch = [&train, &model, o, steps_per_epoch, draws](
+  // Data-parallel: the step's batch × W examples are drawn in one sequence (as one process with
+  // that batch would) and rank r keeps the r-th batch of them.
+  auto step_batch = [&train, &model, o, steps_per_epoch, draws, global_batch, rank](
                         int64_t s, std::shared_ptr<const std::vector<int64_t>> order) {
     Rng rng(derive_seed(o.seed ^ kStepStream, static_cast<uint64_t>(s)));
-    const int64_t first = (s % steps_per_epoch) * o.batch;
+    const int64_t first = (s % steps_per_epoch) * global_batch;
+    const int64_t mine = first + static_cast<int64_t>(rank) * o.batch;
     std::vector<Example> examples;
-    for (int64_t b = first; b < std::min(first + o.batch, draws); ++b) {
+    int64_t global_points = 0;
+    for (int64_t b = first; b < std::min(first + global_batch, draws); ++b) {
       const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
+      global_points += d.points.size();
+      if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
       const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
-      examples.push_back(make_example(d, t, o.noise_std, &rng));
+      Example e = make_example(d, t, o.noise_std, &rng);
+      if (b >= mine) examples.push_back(std::move(e));
     }
-    return prepare_batch(*model, examples);
+    PreparedBatch batch;
+    if (examples.empty()) {
+      batch.empty = true;
+    } else {
+      batch = prepare_batch(*model, examples);
+    }
+    batch.global_points = global_points;
+    return batch;
   };
   std::shared_ptr<const std::vector<int64_t>> order;
   int64_t order_epoch = -1;
@@ -376,9 +428,11 @@ TrainResult run(TrainOptions o, bool show_progress) {
   double epoch_loss = 0.0;
   int64_t epoch_steps = 0;
   auto save = [&] {
+    if (!leader) return;
     save_checkpoint(o.out, model);
-    save_state(train_state_path(o.out), optimizer, step, config_json);
+    save_state(train_state_path(o.out), optimizer, step, config_json, world);
   };
+  const std::vector<torch::Tensor> parameters = model->parameters();
 
   BatchPrefetcher prefetch;
   if (step < total) {
@@ -392,12 +446,32 @@ TrainResult run(TrainOptions o, bool show_progress) {
     }
     model->train();
     optimizer.zero_grad();
-    torch::Tensor loss =
-        batch_loss(model, batch, o.huber_delta) / static_cast<double>(batch.points * 3);
-    loss.backward();
+    const auto step_start = std::chrono::steady_clock::now();
+    // Normalised by the points of the whole step (all ranks), so summed gradients are the mean.
+    torch::Tensor loss = batch.empty ? torch::zeros({}, torch::kFloat)
+                                     : batch_loss(model, batch, o.huber_delta) /
+                                           static_cast<double>(batch.global_points * 3);
+    if (!batch.empty) loss.backward();
+    double value = loss.item<double>();
+    if (group) {
+      std::vector<torch::Tensor> grads;
+      for (const torch::Tensor& p : parameters) {
+        if (!p.grad().defined()) p.mutable_grad() = torch::zeros_like(p);
+        grads.push_back(p.grad());
+      }
+      const torch::Tensor total_loss = torch::full({1}, value, torch::kDouble);
+      grads.push_back(total_loss);
+      const auto t_reduce = std::chrono::steady_clock::now();
+      allreduce_sum(*group, grads, "the gradients");
+      result.allreduce_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reduce).count();
+      value = total_loss.item<double>();
+    }
     optimizer.step();
+    result.train_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - step_start).count();
     ++step;
-    const double value = loss.item<double>();
+    result.losses.push_back(value);
     if (!std::isfinite(value)) {
       throw Error("training diverged at step " + std::to_string(step) + " (loss " +
                   std::to_string(value) + "); lower --lr");
@@ -435,8 +509,10 @@ TrainResult run(TrainOptions o, bool show_progress) {
         val_err = rep.val_rollout_error = err / static_cast<double>(val.size());
       }
       result.epochs.push_back(rep);
-      log_info("epoch ", rep.epoch + 1, " step ", step, ": train loss ", rep.train_loss,
-               ", val loss ", rep.val_loss, ", val rollout error ", rep.val_rollout_error);
+      if (leader) {
+        log_info("epoch ", rep.epoch + 1, " step ", step, ": train loss ", rep.train_loss,
+                 ", val loss ", rep.val_loss, ", val rollout error ", rep.val_rollout_error);
+      }
       epoch_loss = 0.0;
       epoch_steps = 0;
     }
@@ -453,14 +529,28 @@ TrainResult run(TrainOptions o, bool show_progress) {
   if (result.start_step == step) save();
   if (progress) progress->finish();
   result.steps = step;
+  result.parameter_digest = parameter_digest(model);
+  if (group) {
+    const std::vector<std::string> digests =
+        group->gather_bytes("parameter digests", std::to_string(result.parameter_digest));
+    for (size_t r = 1; r < digests.size(); ++r) {
+      if (digests[r] != digests[0]) {
+        throw Error("data-parallel ranks diverged: rank " + std::to_string(r) +
+                    " ends with other parameters than rank 0");
+      }
+    }
+    if (leader) {
+      log_info("parameters identical on all ", world, " ranks (digest ", digests[0], ")");
+    }
+  }
   return result;
 }
 
 }  // namespace
 
-TrainResult train_model(TrainOptions options, bool show_progress) {
+TrainResult train_model(TrainOptions options, bool show_progress, ProcessGroup* group) {
   try {
-    return run(std::move(options), show_progress);
+    return run(std::move(options), show_progress, group);
   } catch (const c10::Error& e) {
     throw Error(std::string("training failed in LibTorch: ") + e.what_without_backtrace());
   }

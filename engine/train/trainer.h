@@ -23,8 +23,16 @@ struct TrainResult {
   int64_t steps = 0;       ///< Total steps done (including resumed ones).
   int64_t steps_per_epoch = 0;
   double last_loss = 0.0;
+  std::vector<double> losses;  ///< Loss of every step of this run (over all ranks' examples).
   std::vector<EpochReport> epochs;
+  int world_size = 1;
+  /// FNV-1a of the parameters' bytes at the end (equal on every rank of a data-parallel run).
+  uint64_t parameter_digest = 0;
+  double allreduce_seconds = 0.0;  ///< Time inside the gradient all-reduces (data-parallel).
+  double train_seconds = 0.0;      ///< Wall time of the steps.
 };
+
+class ProcessGroup;
 
 /// Trains a model as `options` says (options.resolve() is applied with the dataset's scenario).
 /// Reads DIR/manifest.json train and val splits, computes normalisation statistics from the
@@ -38,6 +46,17 @@ struct TrainResult {
 /// atomically. Shows a progress bar with loss and ETA on stderr when `show_progress`. Throws
 /// ValueError/IoError/FormatError for bad options, data or a resume state that does not match
 /// (naming the file); LibTorch errors become dynscope Error.
-TrainResult train_model(TrainOptions options, bool show_progress = false);
+///
+/// With a `group` of W ranks (data-parallel, every rank calls this with the same options): rank 0
+/// computes the normalisation statistics and its parameters are broadcast; each step's
+/// batch × W examples come from the one seeded epoch order exactly as one process with batch
+/// batch × W would draw them, and rank r trains on the r-th batch of them; the loss is normalised
+/// by the points of all W batches and the gradients are summed by bucketed all-reduces, so every
+/// rank holds identical parameters and the loss curve is that of the single process. Rank 0 alone
+/// writes checkpoint, state, recipe and log and validates. --resume needs the checkpoint and
+/// state readable by every rank (a shared directory) and the same world size. At the end the
+/// ranks' parameter digests are compared (Error if they differ).
+TrainResult train_model(TrainOptions options, bool show_progress = false,
+                        ProcessGroup* group = nullptr);
 
 }  // namespace dynscope
