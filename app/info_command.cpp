@@ -209,6 +209,8 @@ void print_trace(const std::string& path, const ModelTrace& t, const InfoOptions
                         {"kind", "trace"},
                         {"scene", t.scene_path},
                         {"checkpoint", t.checkpoint_path},
+                        {"source", t.source},
+                        {"rollout", t.rollout_path},
                         {"frame", t.frame},
                         {"mesh", t.has_mesh},
                         {"feature_records", t.features.size()},
@@ -226,6 +228,13 @@ void print_trace(const std::string& path, const ModelTrace& t, const InfoOptions
   }
   std::printf("%s: trace\n", path.c_str());
   std::printf("  scene      %s, frame %d\n", t.scene_path.c_str(), t.frame);
+  if (t.source == kTraceSourceRollout) {
+    std::printf("  source     rollout %s: the pass that predicted frame %d from its own "
+                "predicted frames %d..%d\n",
+                t.rollout_path.c_str(), t.frame + 1, t.frame - 2, t.frame);
+  } else {
+    std::printf("  source     the scene's ground-truth frames %d..%d\n", t.frame - 2, t.frame);
+  }
   std::printf("  checkpoint %s\n", t.checkpoint_path.c_str());
   for (size_t l = 0; l < t.levels.size(); ++l) {
     const TraceLevel& level = t.levels[l];

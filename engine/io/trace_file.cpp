@@ -191,6 +191,10 @@ void validate_trace(const ModelTrace& t, const std::string& path) {
 
 void write_trace(const ModelTrace& trace, const std::string& path) {
   h5::silence_errors();
+  if (trace.source != kTraceSourceScene && trace.source != kTraceSourceRollout) {
+    throw ValueError("source", "'" + trace.source + "' is neither '" + kTraceSourceScene +
+                                   "' nor '" + kTraceSourceRollout + "'");
+  }
   for (size_t l = 0; l < trace.levels.size(); ++l) {
     const TraceLevel& lv = trace.levels[l];
     if (lv.object_ids.size() != static_cast<size_t>(lv.points.rows()) ||
@@ -212,6 +216,8 @@ void write_trace(const ModelTrace& trace, const std::string& path) {
     root.write_attribute("up_axis", std::string("z"));
     root.write_attribute("scene_path", trace.scene_path);
     root.write_attribute("checkpoint_path", trace.checkpoint_path);
+    root.write_attribute("source", trace.source);
+    root.write_attribute("rollout_path", trace.rollout_path);
     root.write_attribute("model_config", trace.model_config);
     root.write_attribute("frame", static_cast<int64_t>(trace.frame));
     root.write_attribute("num_levels", static_cast<int64_t>(trace.levels.size()));
@@ -279,6 +285,14 @@ ModelTrace read_trace(const std::string& path) {
   ModelTrace t;
   t.scene_path = required_string(root, "scene_path");
   t.checkpoint_path = required_string(root, "checkpoint_path");
+  // Files written before rollout-state traces existed are traces of the scene.
+  t.source = root.string_attribute("source").value_or(kTraceSourceScene);
+  if (t.source != kTraceSourceScene && t.source != kTraceSourceRollout) {
+    throw FormatError(path, "@source",
+                      "'" + t.source + "' is neither '" + kTraceSourceScene + "' nor '" +
+                          kTraceSourceRollout + "'");
+  }
+  t.rollout_path = root.string_attribute("rollout_path").value_or("");
   t.model_config = required_string(root, "model_config");
   t.frame = static_cast<int>(root.int_attribute("frame").value_or(0));
   const auto num_levels = root.int_attribute("num_levels");
@@ -360,6 +374,7 @@ void check_trace_matches_scene(const ModelTrace& trace, const Scene& scene,
                         "object " + std::to_string(level0.object_ids[static_cast<size_t>(p)]) +
                             " is not in the scene (the trace belongs to another scene)");
     }
+    if (trace.source == kTraceSourceRollout) continue;  // predictions may leave their object
     const Vec3 x = level0.points.row(p).transpose();
     const Aabb& box = boxes[static_cast<size_t>(object)];
     if ((x.array() < box.min.array()).any() || (x.array() > box.max.array()).any()) {

@@ -81,10 +81,19 @@ struct TraceQuery {
   Eigen::MatrixXd weights;         ///< `[K,c_mid]` h(p_k − p_0).
 };
 
+/// What a traced forward pass read (the trace file's "source" attribute).
+inline constexpr const char* kTraceSourceScene = "scene";      ///< Ground-truth frames t−2..t.
+inline constexpr const char* kTraceSourceRollout = "rollout";  ///< A rollout's own predicted
+                                                               ///< frames t−2..t.
+
 /// Everything recorded about one forward pass of a model at one frame.
 struct ModelTrace {
   std::string scene_path;
   std::string checkpoint_path;
+  /// kTraceSourceScene or kTraceSourceRollout: a rollout-state trace records the pass that
+  /// produced frame t+1 of the rollout at `rollout_path` from its own predicted frames.
+  std::string source = kTraceSourceScene;
+  std::string rollout_path;
   std::string model_config;  ///< ModelConfig JSON.
   int frame = 0;             ///< Scene frame t the model read (predicting t+1).
   std::vector<TraceLevel> levels;
@@ -116,8 +125,9 @@ bool is_trace_file(const std::string& path);
 ModelTrace read_trace(const std::string& path);
 
 /// Throws FormatError naming `trace_path` unless `trace` was recorded on `scene`: its frame is a
-/// frame of the scene and every level-0 point belongs to an object of the scene and lies on that
-/// object (within a quarter of its bounding-box diagonal) at that frame.
+/// frame of the scene and every level-0 point belongs to an object of the scene and, for a trace
+/// of the scene's own frames, lies on that object (within a quarter of its bounding-box
+/// diagonal) at that frame (a rollout-state trace's points are predictions: they may drift).
 void check_trace_matches_scene(const ModelTrace& trace, const Scene& scene,
                                const std::string& trace_path);
 

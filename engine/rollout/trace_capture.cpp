@@ -4,6 +4,8 @@
 #include <c10/util/Exception.h>
 #include <torch/torch.h>
 
+#include <algorithm>
+
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
 #include "engine/rollout/level_view.h"
@@ -75,23 +77,15 @@ std::vector<ConvSite> conv_sites(UNetImpl& unet, const HierarchyTensors& h) {
   return sites;
 }
 
-ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& points, int frame,
+// One forward pass on `state` (the model's input at `frame`), recorded.
+ModelTrace capture(DynamicsModel& model, const PointState& state, int frame,
                    const std::vector<int>& queries) {
-  if (frame < 2 || frame >= scene.num_frames()) {
-    throw ValueError("frame", std::to_string(frame) + " outside [2, " +
-                                  std::to_string(scene.num_frames() - 1) +
-                                  "] (the state needs frames t−2 and t−1)");
-  }
   for (int q : queries) {
-    if (q < 0 || q >= points.size()) {
+    if (q < 0 || q >= state.size()) {
       throw ValueError("query", "point " + std::to_string(q) + " outside [0, " +
-                                    std::to_string(points.size()) + ")");
+                                    std::to_string(state.size()) + ")");
     }
   }
-  PointState state =
-      PointState::from_positions(points.positions(scene, frame), points.positions(scene, frame - 1),
-                                 points.positions(scene, frame - 2), points.cloud.object_id);
-  state.faces = points.faces;
   torch::NoGradGuard no_grad;
   const Hierarchy h = model->build_hierarchy(state);
   const ModelInput input = make_model_input(state, h);
@@ -144,19 +138,59 @@ ModelTrace capture(DynamicsModel& model, const Scene& scene, const ModelPoints& 
   return t;
 }
 
-}  // namespace
-
-ModelTrace capture_trace(const std::string& checkpoint_path, const Scene& scene,
-                         const ModelPoints& points, int frame, const std::vector<int>& queries) {
+// Loads the checkpoint and records one pass on `state`; LibTorch errors name the checkpoint.
+ModelTrace capture_with(const std::string& checkpoint_path, const PointState& state, int frame,
+                        const std::vector<int>& queries) {
   try {
     DynamicsModel model = load_checkpoint(checkpoint_path);
     model->eval();
-    ModelTrace t = capture(model, scene, points, frame, queries);
+    ModelTrace t = capture(model, state, frame, queries);
     t.checkpoint_path = checkpoint_path;
     return t;
   } catch (const c10::Error& e) {
     throw Error(checkpoint_path + ": trace failed: " + e.what_without_backtrace());
   }
+}
+
+}  // namespace
+
+ModelTrace capture_trace(const std::string& checkpoint_path, const Scene& scene,
+                         const ModelPoints& points, int frame, const std::vector<int>& queries) {
+  if (frame < 2 || frame >= scene.num_frames()) {
+    throw ValueError("frame", std::to_string(frame) + " outside [2, " +
+                                  std::to_string(scene.num_frames() - 1) +
+                                  "] (the state needs frames t−2 and t−1)");
+  }
+  PointState state =
+      PointState::from_positions(points.positions(scene, frame), points.positions(scene, frame - 1),
+                                 points.positions(scene, frame - 2), points.cloud.object_id);
+  state.faces = points.faces;
+  ModelTrace t = capture_with(checkpoint_path, state, frame, queries);
+  t.source = kTraceSourceScene;
+  return t;
+}
+
+int first_rollout_trace_frame(const Rollout& rollout) {
+  return std::max(2, rollout.observed_frames - 1);
+}
+
+ModelTrace capture_rollout_trace(const std::string& checkpoint_path, const Rollout& rollout,
+                                 int frame, const std::vector<int>& queries) {
+  const int first = first_rollout_trace_frame(rollout), last = rollout.num_frames() - 2;
+  if (frame < first || frame > last) {
+    throw ValueError("frame", std::to_string(frame) + " outside [" + std::to_string(first) + ", " +
+                                  std::to_string(last) +
+                                  "]: the rollout's predicted frame t+1 must come from the "
+                                  "model's pass at t, which reads frames t-2..t");
+  }
+  const auto f = static_cast<size_t>(frame);
+  PointState state = PointState::from_positions(rollout.predicted[f], rollout.predicted[f - 1],
+                                                rollout.predicted[f - 2], rollout.object_ids);
+  state.faces = rollout.faces;
+  ModelTrace t = capture_with(checkpoint_path, state, frame, queries);
+  t.source = kTraceSourceRollout;
+  t.scene_path = rollout.scene_path;
+  return t;
 }
 
 }  // namespace dynscope

@@ -217,6 +217,28 @@ TEST(TraceFileTest, TraceMustMatchTheSceneItIsUsedWith) {
   ModelTrace late = t;
   late.frame = 6;  // the scene has frames 0..5
   EXPECT_THROW(check_trace_matches_scene(late, scene, "t.h5"), FormatError);
+
+  // A rollout-state trace reads predictions, which may have left their object; its objects must
+  // still be the scene's.
+  ModelTrace predicted = far;
+  predicted.source = kTraceSourceRollout;
+  EXPECT_NO_THROW(check_trace_matches_scene(predicted, scene, "t.h5"));
+  predicted.levels[0].object_ids[1] = 9;
+  EXPECT_THROW(check_trace_matches_scene(predicted, scene, "t.h5"), FormatError);
+}
+
+TEST(TraceFileTest, SourceRoundTripsAndOldFilesAreSceneTraces) {
+  ModelTrace t = make_trace(false);
+  EXPECT_EQ(t.source, kTraceSourceScene);
+  t.source = kTraceSourceRollout;
+  t.rollout_path = "runs/r.h5";
+  const std::string path = trace_path("source");
+  write_trace(t, path);
+  const ModelTrace r = read_trace(path);
+  EXPECT_EQ(r.source, kTraceSourceRollout);
+  EXPECT_EQ(r.rollout_path, "runs/r.h5");
+  t.source = "dream";
+  EXPECT_THROW(write_trace(t, path), ValueError);
 }
 
 }  // namespace

@@ -58,6 +58,29 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   const ModelTrace t = read_trace(trace);
   EXPECT_EQ(t.levels.size(), 2u);
   EXPECT_FALSE(t.queries.empty());
+  EXPECT_EQ(t.source, kTraceSourceScene);
+  // The pass that predicted frame 5 of the rollout, from the rollout's own frames 2..4.
+  const std::string rollout_trace = (dir / "rollout_trace.h5").string();
+  ASSERT_EQ(run("trace --checkpoint " + ckpt + " --rollout " + rollout + " --frame 4 --query 3"
+                " --out " + rollout_trace),
+            0);
+  const ModelTrace rt = read_trace(rollout_trace);
+  EXPECT_EQ(rt.source, kTraceSourceRollout);
+  EXPECT_EQ(rt.rollout_path, rollout);
+  EXPECT_EQ(rt.scene_path, r.scene_path);
+  EXPECT_EQ(rt.frame, 4);
+  EXPECT_EQ(rt.levels[0].points, r.predicted[4]) << "the model read its own prediction";
+  EXPECT_NE(rt.levels[0].points, r.truth[4]);
+  EXPECT_FALSE(rt.queries.empty());
+  const test::CommandResult described = test::run_dynscope("info " + rollout_trace);
+  EXPECT_NE(described.output.find("source     rollout"), std::string::npos) << described.output;
+  EXPECT_NE(run("trace --checkpoint " + ckpt + " --rollout " + rollout + " --frame 1 --out " +
+                rollout_trace),
+            0)
+      << "frame 1 was observed, not predicted";
+  EXPECT_NE(run("trace --checkpoint " + ckpt + " --rollout " + rollout + " --scene " + scene +
+                " --out " + rollout_trace),
+            0);
   // render draws the model's own level and lists: from the trace file, or traced on the fly.
   const fs::path frames = dir / "frames";
   ASSERT_EQ(run("render " + scene + " --trace " + trace + " --level 1 --pick 0 --no-video --out " +
