@@ -7,6 +7,7 @@
 
 #include "app/viewer/viewports.h"
 #include "engine/core/error.h"
+#include "engine/io/mesh_import.h"
 #include "engine/io/rollout_file.h"
 #include "engine/io/scene_file.h"
 #include "engine/io/trace_file.h"
@@ -240,6 +241,12 @@ void ViewerState::open_file(const std::string& path) {
     open_rollout(path);
   } else if (is_trace_file(path)) {
     open_trace(path);
+  } else if (!is_hdf5_file(path) && std::filesystem::is_regular_file(path) &&
+             is_mesh_file(path)) {
+    // A mesh alone has no motion to show: say what to do with it instead of "not HDF5".
+    throw IoError(path, "is a mesh, not a scene, rollout or trace; make scenes with it "
+                        "(`dynscope generate --scenario NAME --meshes DIR`) or inspect it "
+                        "(`dynscope info " + path + "`)");
   } else {
     open_scene(path);
   }

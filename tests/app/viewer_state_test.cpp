@@ -276,5 +276,20 @@ TEST(ViewerState, LevelsAndObservedFramesComeFromTheEngine) {
   EXPECT_EQ(s.observed_frames(), 5);
 }
 
+TEST(ViewerState, AMeshFileSaysWhatItIsAndKeepsTheScene) {
+  ViewerState s;
+  s.open_scene(testing::collide_scene());
+  const std::string mesh = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/meshes/torus.obj";
+  try {
+    s.open_file(mesh);
+    FAIL() << "a mesh opened as a scene";
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("is a mesh"), std::string::npos) << what;
+    EXPECT_NE(what.find("--meshes"), std::string::npos) << what;
+  }
+  EXPECT_EQ(s.document().path, testing::collide_scene());
+}
+
 }  // namespace
 }  // namespace dynscope::app::viewer
