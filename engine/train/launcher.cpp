@@ -19,6 +19,8 @@
 
 #include "engine/core/error.h"
 
+extern char** environ;
+
 namespace dynscope {
 
 namespace {
@@ -171,8 +173,27 @@ LaunchResult launch_ranks(const LaunchOptions& given) {
         "LOCAL_RANK=" + std::to_string(i), "LOCAL_WORLD_SIZE=" + std::to_string(o.nproc),
         "MASTER_ADDR=" + o.master_addr,    "MASTER_PORT=" + std::to_string(o.master_port)};
     env.insert(env.end(), o.env.begin(), o.env.end());
+    // This process's environment minus the names set here, then ours. Everything the child
+    // needs is built before fork(): after it, only system calls (no allocation) run there.
+    std::vector<std::string> environment;
+    for (char** e = environ; e && *e; ++e) {
+      const std::string entry = *e;
+      const std::string name = entry.substr(0, entry.find('='));
+      const bool replaced = std::any_of(env.begin(), env.end(), [&](const std::string& v) {
+        return v.compare(0, name.size() + 1, name + "=") == 0;
+      });
+      if (!replaced) environment.push_back(entry);
+    }
+    environment.insert(environment.end(), env.begin(), env.end());
+    std::vector<char*> cenv;
+    for (std::string& e : environment) cenv.push_back(e.data());
+    cenv.push_back(nullptr);
     std::vector<std::string> argv = {o.executable};
     argv.insert(argv.end(), o.args.begin(), o.args.end());
+    std::vector<char*> cargv;
+    for (std::string& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    static const char kExecFailed[] = "launcher: cannot run the rank's program\n";
     const pid_t pid = ::fork();
     if (pid < 0) {
       stop_all(SIGKILL);
@@ -187,12 +208,8 @@ LaunchResult launch_ranks(const LaunchOptions& given) {
       ::close(out[1]);
       ::close(err[0]);
       ::close(err[1]);
-      for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
-      std::vector<char*> cargv;
-      for (std::string& a : argv) cargv.push_back(a.data());
-      cargv.push_back(nullptr);
-      ::execv(o.executable.c_str(), cargv.data());
-      std::fprintf(stderr, "cannot run %s: %s\n", o.executable.c_str(), std::strerror(errno));
+      ::execve(o.executable.c_str(), cargv.data(), cenv.data());
+      [[maybe_unused]] const ssize_t n = ::write(2, kExecFailed, sizeof kExecFailed - 1);
       ::_exit(127);
     }
     ::setpgid(pid, pid);  // also here: no race with the first signal
