@@ -61,8 +61,10 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   EXPECT_EQ(t.source, kTraceSourceScene);
   // The pass that predicted frame 5 of the rollout, from the rollout's own frames 2..4.
   const std::string rollout_trace = (dir / "rollout_trace.h5").string();
-  ASSERT_EQ(run("trace --checkpoint " + ckpt + " --rollout " + rollout + " --frame 4 --query 3"
-                " --out " + rollout_trace),
+  ASSERT_EQ(run("trace --checkpoint " + ckpt + " --rollout " + rollout +
+                " --frame 4 --query 3"
+                " --out " +
+                rollout_trace),
             0);
   const ModelTrace rt = read_trace(rollout_trace);
   EXPECT_EQ(rt.source, kTraceSourceRollout);
@@ -87,12 +89,16 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
                 (frames / "a").string()),
             0);
   EXPECT_TRUE(fs::exists(frames / "a" / "frame_0004.png")) << "frames default to the trace's";
-  EXPECT_NE(run("render " + scene + " --trace " + trace + " --level 1 --pick 0 --frames 5"
-                " --no-video --out " + (frames / "b").string()),
+  EXPECT_NE(run("render " + scene + " --trace " + trace +
+                " --level 1 --pick 0 --frames 5"
+                " --no-video --out " +
+                (frames / "b").string()),
             0)
       << "a trace holds one frame";
-  ASSERT_EQ(run("render " + scene + " --checkpoint " + ckpt + " --frames 6 --level 1 --pick 1"
-                " --no-video --out " + (frames / "c").string()),
+  ASSERT_EQ(run("render " + scene + " --checkpoint " + ckpt +
+                " --frames 6 --level 1 --pick 1"
+                " --no-video --out " +
+                (frames / "c").string()),
             0);
   EXPECT_TRUE(fs::exists(frames / "c" / "frame_0006.png"));
   const ModelTrace traced = read_trace((frames / "c" / "trace.h5").string());
@@ -103,8 +109,10 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
       EXPECT_EQ(q.query_index, 1) << q.conv;
     }
   }
-  EXPECT_NE(run("render " + scene + " --checkpoint " + ckpt + " --level 1 --pick 100000"
-                " --no-video --out " + (frames / "d").string()),
+  EXPECT_NE(run("render " + scene + " --checkpoint " + ckpt +
+                " --level 1 --pick 100000"
+                " --no-video --out " +
+                (frames / "d").string()),
             0);
   EXPECT_EQ(info_kind(rollout), "rollout");
   EXPECT_EQ(info_kind(trace), "trace");
@@ -126,20 +134,24 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
   const std::string recipe = (dir / "recipe.json").string();
   const nlohmann::json r = {
       {"description", "tiny"},
-      {"datasets", {{{"out", data + "/drop"}, {"scenario", "drop"}, {"count", 10}, {"seed", 4}},
-                    {{"out", data + "/roll"}, {"scenario", "roll"}, {"count", 10}, {"seed", 4}}}},
+      {"datasets",
+       {{{"out", data + "/drop"}, {"scenario", "drop"}, {"count", 10}, {"seed", 4}},
+        {{"out", data + "/roll"}, {"scenario", "roll"}, {"count", 10}, {"seed", 4}}}},
       {"data", {data + "/drop", data + "/roll"}},
       {"out", (dir / "a.pt").string()},
-      {"model_config", {{"width", 8}, {"levels", 2}, {"bottleneck_blocks", 1}, {"k", 6},
-                        {"k_relational", 6}, {"c_mid", 4}}},
+      {"model_config",
+       {{"width", 8},
+        {"levels", 2},
+        {"bottleneck_blocks", 1},
+        {"k", 6},
+        {"k_relational", 6},
+        {"c_mid", 4}}},
       {"max_steps", 2},
       {"val_scenes", 1},
       {"threads", 1},
       {"seed", 3},
       {"notes", {{"wall_time_s", 1.0}}}};
-  {
-    std::ofstream(recipe) << r.dump(2);
-  }
+  { std::ofstream(recipe) << r.dump(2); }
   ASSERT_EQ(run("train --recipe " + recipe), 0);
   EXPECT_TRUE(fs::exists(fs::path(data) / "drop" / "manifest.json"));
   EXPECT_TRUE(fs::exists(fs::path(data) / "roll" / "manifest.json"));
@@ -150,8 +162,7 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
   const std::string bytes_a((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
   const std::string bytes_b((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   EXPECT_EQ(info_kind(again), "checkpoint");
-  const nlohmann::json written =
-      nlohmann::json::parse(std::ifstream(dir / "a.pt.recipe.json"));
+  const nlohmann::json written = nlohmann::json::parse(std::ifstream(dir / "a.pt.recipe.json"));
   EXPECT_EQ(written.at("datasets").size(), 2u);
   EXPECT_EQ(written.at("notes").at("wall_time_s"), 1.0);
   EXPECT_EQ(bytes_a.size(), bytes_b.size());

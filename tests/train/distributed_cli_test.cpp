@@ -22,6 +22,7 @@
 #include "engine/model/checkpoint.h"
 #include "engine/train/train_options.h"
 #include "tests/support/run_command.h"
+#include "tests/train/train_fixtures.h"
 
 extern char** environ;
 
@@ -63,16 +64,7 @@ std::vector<std::string> split_args(const std::string& text) {
   return out;
 }
 
-void expect_same_weights(const std::string& a, const std::string& b) {
-  DynamicsModel ma = load_checkpoint(a);
-  DynamicsModel mb = load_checkpoint(b);
-  const auto pa = ma->named_parameters();
-  const auto pb = mb->named_parameters();
-  ASSERT_EQ(pa.size(), pb.size());
-  for (const auto& item : pa) {
-    EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
-  }
-}
+using testing::expect_same_weights;
 
 TEST(DistributedCli, KilledRankEndsTheJobAndResumeContinuesExactly) {
   const fs::path dir =

@@ -20,6 +20,7 @@
 #include "engine/train/launcher.h"
 #include "engine/train/process_group.h"
 #include "engine/train/trainer.h"
+#include "tests/train/train_fixtures.h"
 
 namespace dynscope {
 namespace {
@@ -28,18 +29,7 @@ namespace fs = std::filesystem;
 
 // 6 drop scenes (4 train, 1 val, 1 test), generated once per test process.
 const std::string& dataset_dir() {
-  static const std::string dir = [] {
-    const fs::path d =
-        fs::temp_directory_path() / ("dynscope_distributed_test_data_" + std::to_string(getpid()));
-    fs::remove_all(d);
-    DatasetOptions o;
-    o.scenario = "drop";
-    o.count = 6;
-    o.seed = 9;
-    o.out_dir = d.string();
-    generate_dataset(o);
-    return d.string();
-  }();
+  static const std::string dir = testing::generate_tiny_dataset("distributed_test", "drop", 6, 9);
   return dir;
 }
 
@@ -52,23 +42,9 @@ fs::path temp_dir(const std::string& name) {
 }
 
 TrainOptions tiny_options(const std::string& out) {
-  TrainOptions o;
-  o.data_dirs = {dataset_dir()};
-  o.out = out;
-  o.model.width = 8;
-  o.model.levels = 2;
-  o.model.bottleneck_blocks = 1;
-  o.model.k = 6;
-  o.model.k_relational = 6;
-  o.model.c_mid = 4;
-  o.model.pos_channels = 4;
-  o.sampling.voxel = 0.1;
-  o.val_scenes = 1;
-  o.val_frames = 5;
-  o.threads = 1;
+  TrainOptions o = testing::tiny_train_options(dataset_dir(), out);
   o.seed = 3;
   o.samples_per_scene = 3;  // 12 draws per epoch: the last step of an epoch is short
-  o.checkpoint_every = 1000;
   return o;
 }
 

@@ -11,6 +11,7 @@
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
 #include "engine/sim/dataset.h"
+#include "tests/train/train_fixtures.h"
 
 namespace dynscope {
 namespace {
@@ -19,51 +20,17 @@ namespace fs = std::filesystem;
 
 // A tiny drop dataset shared by the tests of this file (10 scenes: 8 train, 1 val, 1 test).
 const std::string& dataset_dir() {
-  static const std::string dir = [] {
-    const fs::path d =
-        fs::temp_directory_path() / ("dynscope_train_test_data_" + std::to_string(getpid()));
-    fs::remove_all(d);
-    DatasetOptions o;
-    o.scenario = "drop";
-    o.count = 10;
-    o.seed = 5;
-    o.out_dir = d.string();
-    generate_dataset(o);
-    return d.string();
-  }();
+  static const std::string dir = testing::generate_tiny_dataset("train_test", "drop", 10, 5);
   return dir;
 }
 
 TrainOptions tiny_options(const std::string& out) {
-  TrainOptions o;
-  o.data_dirs = {dataset_dir()};
-  o.out = out;
-  o.model.width = 8;
-  o.model.levels = 2;
-  o.model.bottleneck_blocks = 1;
-  o.model.k = 6;
-  o.model.k_relational = 6;
-  o.model.c_mid = 4;
-  o.model.pos_channels = 4;
-  o.sampling.voxel = 0.1;
-  o.val_scenes = 1;
-  o.val_frames = 5;
-  o.threads = 1;
+  TrainOptions o = testing::tiny_train_options(dataset_dir(), out);
   o.seed = 11;
-  o.checkpoint_every = 1000;
   return o;
 }
 
-void expect_same_weights(const std::string& a, const std::string& b) {
-  DynamicsModel ma = load_checkpoint(a);
-  DynamicsModel mb = load_checkpoint(b);
-  const auto pa = ma->named_parameters();
-  const auto pb = mb->named_parameters();
-  ASSERT_EQ(pa.size(), pb.size());
-  for (const auto& item : pa) {
-    EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
-  }
-}
+using testing::expect_same_weights;
 
 TEST(TrainerTest, ResumedRunEqualsUninterruptedRun) {
   const fs::path dir =
