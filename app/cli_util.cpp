@@ -25,12 +25,9 @@ std::vector<std::string>& stored_command_line() {
 }
 }  // namespace
 
-void set_command_line(int argc, char** argv) {
-  stored_command_line().assign(argv, argv + argc);
-}
+void set_command_line(int argc, char** argv) { stored_command_line().assign(argv, argv + argc); }
 
 const std::vector<std::string>& command_line() { return stored_command_line(); }
-
 
 std::string format_aabb(const Aabb& box) {
   if (box.empty()) return "empty";
@@ -167,6 +164,19 @@ Rollout rollout_checkpoint(const std::string& checkpoint, const Scene& scene,
   r.model_config = model.config_json;
   if (points_out) *points_out = std::move(points);
   return r;
+}
+
+ModelTrace capture_checkpoint_rollout_trace(const std::string& checkpoint, const Rollout& rollout,
+                                            const std::string& rollout_path, int frame, int level,
+                                            int picked) {
+  require_readable_file(checkpoint);
+  ModelTrace trace = capture_rollout_trace(checkpoint, rollout, frame, {});
+  if (picked >= 0) {
+    const int query = trace_level0_point(trace, level, picked);
+    trace = capture_rollout_trace(checkpoint, rollout, frame, {query});
+  }
+  trace.rollout_path = rollout_path;
+  return trace;
 }
 
 ModelTrace capture_checkpoint_trace(const std::string& checkpoint, const Scene& scene,

@@ -81,6 +81,13 @@ Rollout rollout_checkpoint(const std::string& checkpoint, const Scene& scene,
                            double voxel = 0.0, Progress* progress = nullptr,
                            ModelPoints* points_out = nullptr);
 
+/// The pass of `checkpoint` that produced frame `frame`+1 of `rollout` (capture_rollout_trace),
+/// with the filter weights of level `level`'s point `picked` when picked >= 0; rollout_path is
+/// recorded. Throws like capture_rollout_trace and capture_checkpoint_trace.
+ModelTrace capture_checkpoint_rollout_trace(const std::string& checkpoint, const Rollout& rollout,
+                                            const std::string& rollout_path, int frame, int level,
+                                            int picked);
+
 /// One forward pass of `checkpoint` on `scene` at `frame`, sampled as the checkpoint was trained
 /// (its recipe), with the learned filter weights of level `level`'s point `picked` when
 /// picked >= 0 (a first pass finds which level-0 point that is). Throws like capture_trace, and

@@ -53,6 +53,10 @@ ModelTrace EngineModelServices::trace(LoadedCheckpoint& loaded, const TraceReque
   auto& c = static_cast<EngineCheckpoint&>(loaded);
   std::lock_guard<std::mutex> lock(c.mutex);
   control.check();
+  if (request.rollout) {
+    return app::capture_checkpoint_rollout_trace(c.path, *request.rollout, request.rollout_path,
+                                                 request.frame, request.level, request.picked);
+  }
   return app::capture_checkpoint_trace(c.path, *request.scene, request.scene_path, request.frame,
                                        request.level, request.picked);
 }

@@ -46,6 +46,32 @@ void draw_trace_mesh(const ViewerState& state, const ModelTrace& trace, Actions&
   }
 }
 
+// How the picked point's lists, read from the rollout's prediction, differ from those the same
+// model builds from the ground truth at the frame (level 0: the same points in both).
+void draw_input_difference(const ModelTrace& predicted, const ModelTrace& truth, int level,
+                           int point) {
+  ImGui::TextColored(kMutedText, "lists from the prediction vs from the ground truth:");
+  if (level != 0) {
+    ImGui::TextWrapped("(level %d has other points in each; compare at level 0)", level);
+    return;
+  }
+  auto line = [](const char* name, const ListDifference& d) {
+    auto join = [](const std::vector<int>& v) {
+      std::string s;
+      for (int i : v) s += (s.empty() ? "" : " ") + std::to_string(i);
+      return s.empty() ? std::string("-") : s;
+    };
+    if (d.only_a.empty() && d.only_b.empty()) {
+      ImGui::Text("%s: the same", name);
+      return;
+    }
+    ImGui::TextWrapped("%s: only with the prediction %s; only with the truth %s", name,
+                       join(d.only_a).c_str(), join(d.only_b).c_str());
+  };
+  line("object kNN", neighbor_difference(predicted, truth, LevelList::kSame, point));
+  line("relational", neighbor_difference(predicted, truth, LevelList::kRelational, point));
+}
+
 // One neighbour list as a table (point, object, distance, |h|) and the filter as bars.
 void neighbour_table(const char* id, const std::vector<NeighborEntry>& list, const ImVec4& color,
                      bool traced) {
@@ -138,10 +164,27 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
   const ModelTrace* trace = state.shown_trace();
   const render::ViewSpec& view = state.view();
   const int frame = state.level_frame();
-  if (!state.checkpoint().empty() && state.trace_frame() != view.frame) {
+  if (state.has_rollout() && !state.checkpoint().empty() && !state.trace_from_file()) {
+    int input = state.trace_input() == TraceInput::kPrediction ? 0 : 1;
+    ImGui::TextUnformatted("model input:");
+    ImGui::SameLine();
+    if (ImGui::RadioButton("its prediction", &input, 0)) {
+      out.add([](ViewerState& s) { s.set_trace_input(TraceInput::kPrediction); });
+    }
+    ImGui::SameLine();
+    if (ImGui::RadioButton("ground truth", &input, 1)) {
+      out.add([](ViewerState& s) { s.set_trace_input(TraceInput::kTruth); });
+    }
+  }
+  if (!state.checkpoint().empty() && state.trace_frame() > view.frame) {
     ImGui::TextWrapped(
         "Frame %d is observed: the model reads frames t-2..t, so the inspector shows its trace "
         "at frame %d, the first it can trace.",
+        view.frame, state.trace_frame());
+  } else if (!state.checkpoint().empty() && state.trace_frame() < view.frame) {
+    ImGui::TextWrapped(
+        "Frame %d is the last: the inspector shows the pass at frame %d, which "
+        "predicted it.",
         view.frame, state.trace_frame());
   }
   if (!state.checkpoint().empty() && !trace) {
@@ -196,6 +239,9 @@ void draw_inspector_panel(const ViewerState& state, Actions& out) {
   }
   neighbour_table("rel", n.relational, orange, forward);
   if (forward && !weighted) ImGui::TextColored(kMutedText, "capturing filter weights...");
+  if (trace && trace->source == kTraceSourceRollout && state.truth_input_levels()) {
+    draw_input_difference(*trace, *state.truth_input_levels(), view.level, view.picked_point);
+  }
   if (trace && trace->has_mesh) draw_trace_mesh(state, *trace, out);
 }
 

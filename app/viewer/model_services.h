@@ -27,12 +27,15 @@ struct RolloutRequest {
 };
 
 /// One trace the viewer wants: a forward pass on `scene` at `frame` with the filter weights of
-/// level `level`'s point `picked` (-1: none).
+/// level `level`'s point `picked` (-1: none). With `rollout` set, the pass reads the rollout's own
+/// predicted frames frame−2..frame (the one that produced its frame+1), not the scene's.
 struct TraceRequest {
   std::string checkpoint;
   std::shared_ptr<const Scene> scene;
   std::string scene_path;
   int frame = -1, level = -1, picked = -1;
+  std::shared_ptr<const Rollout> rollout;
+  std::string rollout_path;
 };
 
 /// A checkpoint loaded once (weights, config) by ModelServices::load; what it holds is the

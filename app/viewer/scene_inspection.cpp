@@ -57,8 +57,8 @@ PointInfo inspect_point(const render::SceneRenderData& data, int level_point, in
     cloud_point = -1;
     const Points& model = trace->levels.front().points;
     if (cloud.size() == model.rows() && info.cloud_point >= 0 &&
-        (cloud.positions(scene, frame).row(info.cloud_point) - model.row(info.cloud_point))
-                .norm() < 1e-9) {
+        (cloud.positions(scene, frame).row(info.cloud_point) - model.row(info.cloud_point)).norm() <
+            1e-9) {
       cloud_point = info.cloud_point;
     }
   } else {
@@ -69,9 +69,7 @@ PointInfo inspect_point(const render::SceneRenderData& data, int level_point, in
     info.position = cloud.positions(scene, frame).row(level_point).transpose();
   }
   if (cloud_point < 0) return info;
-  auto at = [&](int f) -> Vec3 {
-    return cloud.positions(scene, f).row(cloud_point).transpose();
-  };
+  auto at = [&](int f) -> Vec3 { return cloud.positions(scene, f).row(cloud_point).transpose(); };
   const int prev = std::max(0, frame - 1), next = std::min(scene.num_frames() - 1, frame + 1);
   if (next > prev) info.velocity = (at(next) - at(prev)) / ((next - prev) * scene.dt_s);
   info.has_velocity = true;
@@ -127,6 +125,30 @@ PointInfo inspect_trace_point(const ModelTrace& trace, const Scene& scene, int l
   if (object >= 0) info.object_name = scene.objects[static_cast<size_t>(object)].name;
   info.position = l.points.row(level_point).transpose();
   return info;
+}
+
+ListDifference neighbor_difference(const ModelTrace& a, const ModelTrace& b, LevelList list,
+                                   int point) {
+  auto row = [&](const ModelTrace& t) {
+    std::vector<int> out;
+    if (t.levels.empty()) return out;
+    for (const TraceList& l : t.levels.front().lists) {
+      if (l.name != level_list_name(list) || point < 0 || point >= l.index.rows()) continue;
+      for (Eigen::Index k = 0; k < l.index.cols(); ++k) {
+        if (l.mask(point, k) && l.index(point, k) != point) out.push_back(l.index(point, k));
+      }
+    }
+    return out;
+  };
+  const std::vector<int> ra = row(a), rb = row(b);
+  ListDifference d;
+  for (int i : ra) {
+    if (std::find(rb.begin(), rb.end(), i) == rb.end()) d.only_a.push_back(i);
+  }
+  for (int i : rb) {
+    if (std::find(ra.begin(), ra.end(), i) == ra.end()) d.only_b.push_back(i);
+  }
+  return d;
 }
 
 std::vector<LevelCount> trace_level_counts(const ModelTrace& trace) {

@@ -10,6 +10,7 @@
 #include "engine/core/types.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/io/trace_file.h"
+#include "engine/model/hierarchy.h"
 #include "engine/scene/scene.h"
 #include "render/scene_adapter.h"
 
@@ -18,7 +19,8 @@ namespace dynscope::app::viewer {
 /// One point of the shown U-Net level at one frame.
 struct PointInfo {
   int level_point = -1;  ///< Index into the level's points.
-  int cloud_point = -1;  ///< Index of the level-0 point it is (the model's, or the sampled cloud's).
+  int cloud_point =
+      -1;  ///< Index of the level-0 point it is (the model's, or the sampled cloud's).
   int32_t object_id = -1;
   std::string object_name;
   Vec3 position = Vec3::Zero();  ///< World, scene units.
@@ -81,6 +83,15 @@ struct LevelCount {
   int points = 0;
   std::map<int32_t, int> per_object;
 };
+
+/// How one level-0 point's neighbour list differs between two traces of the same points (a
+/// rollout-state trace and the hierarchy of the ground truth at its frame): the neighbours only
+/// `a` lists and those only `b` lists, in list order. Empty when either trace lacks the list.
+struct ListDifference {
+  std::vector<int> only_a, only_b;
+};
+ListDifference neighbor_difference(const ModelTrace& a, const ModelTrace& b, LevelList list,
+                                   int point);
 
 /// Points per level and object of a trace or level view (the model's own hierarchy).
 std::vector<LevelCount> trace_level_counts(const ModelTrace& trace);

@@ -12,6 +12,7 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/trace_file.h"
 #include "engine/model/model_config.h"
+#include "engine/rollout/level_view.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/rollout/state_history.h"
 #include "render/batch_render.h"
@@ -139,13 +140,6 @@ void ViewerState::set_frame(int frame) {
   ensure_level_view();
 }
 
-int ViewerState::trace_frame() const {
-  if (checkpoint_.empty()) return view_.frame;
-  return std::max(view_.frame, kFirstTraceableFrame);
-}
-
-int ViewerState::level_frame() const { return shown_trace() ? trace_->frame : view_.frame; }
-
 void ViewerState::select_point(int point) {
   if (point >= 0) {
     ensure_render_data();
@@ -212,19 +206,6 @@ Selection ViewerState::selection() const {
   return {};
 }
 
-int ViewerState::num_levels() const {
-  // The model's own count: the trace's levels, else those of the config whose hierarchy the level
-  // browser shows for this scene.
-  if (trace_) return static_cast<int>(trace_->levels.size());
-  if (doc_) return level_view_config(doc_->scene).levels;
-  return ModelConfig{}.levels;
-}
-
-std::vector<LevelCount> ViewerState::level_counts() const {
-  if (const ModelTrace* trace = shown_trace()) return trace_level_counts(*trace);
-  return {};
-}
-
 void ViewerState::set_level(int level) {
   const int last = num_levels() - 1;
   if (level < 0 || level > last) {
@@ -241,12 +222,13 @@ void ViewerState::open_file(const std::string& path) {
     open_rollout(path);
   } else if (is_trace_file(path)) {
     open_trace(path);
-  } else if (!is_hdf5_file(path) && std::filesystem::is_regular_file(path) &&
-             is_mesh_file(path)) {
+  } else if (!is_hdf5_file(path) && std::filesystem::is_regular_file(path) && is_mesh_file(path)) {
     // A mesh alone has no motion to show: say what to do with it instead of "not HDF5".
-    throw IoError(path, "is a mesh, not a scene, rollout or trace; make scenes with it "
-                        "(`dynscope generate --scenario NAME --meshes DIR`) or inspect it "
-                        "(`dynscope info " + path + "`)");
+    throw IoError(path,
+                  "is a mesh, not a scene, rollout or trace; make scenes with it "
+                  "(`dynscope generate --scenario NAME --meshes DIR`) or inspect it "
+                  "(`dynscope info " +
+                      path + "`)");
   } else {
     open_scene(path);
   }
@@ -369,31 +351,6 @@ void ViewerState::open_trace(const std::string& path) {
   show_panel(Panel::kLevels);
 }
 
-void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked) {
-  render::ViewSpec build = view_;
-  build.level = level;
-  build.layers.level_points = true;
-  build.layers.ground_truth = true;  // the "all points" layer stays available
-  build.picked_point = -1;
-  build.frame = trace->frame;
-  trace_data_ = std::make_unique<render::SceneRenderData>(doc_->scene, build, trace);
-  trace_ = std::move(trace);
-  trace_level_ = level;
-  trace_picked_ = picked;
-}
-
-const ModelTrace* ViewerState::shown_trace() const {
-  if (!trace_ || !trace_data_ || trace_->frame != trace_frame() || trace_level_ != view_.level) {
-    return nullptr;
-  }
-  return trace_.get();
-}
-
-const render::SceneRenderData* ViewerState::active_data() const {
-  if (shown_trace()) return trace_data_.get();
-  return doc_ ? doc_->data.get() : nullptr;
-}
-
 void ViewerState::start_rollouts(const std::string& compare) {
   if (!services_ || checkpoint_.empty()) {
     throw ValueError("rollout", "a checkpoint is needed (--checkpoint, or Model > Use)");
@@ -498,14 +455,19 @@ void ViewerState::update_jobs() {
       trace_frame() >= doc_->scene.num_frames()) {
     return;
   }
-  const TraceWant want{trace_frame(), view_.level, view_.picked_point};
+  const TraceWant want{trace_frame(), view_.level, view_.picked_point, traces_rollout()};
   const bool have = trace_ && trace_->frame == want.frame && trace_level_ == want.level &&
-                    trace_picked_ == want.picked;
+                    trace_picked_ == want.picked &&
+                    (trace_->source == kTraceSourceRollout) == want.rollout;
   if (have || trace_failed_ == want) return;
   trace_request_ = want;
   TraceRequest request{checkpoint_, std::make_shared<const Scene>(doc_->scene),
                        doc_->path,  want.frame,
                        want.level,  want.picked};
+  if (want.rollout) {
+    request.rollout = std::make_shared<const Rollout>(rollout_->rollout);
+    request.rollout_path = rollout_->path;
+  }
   ModelServices* services = services_;
   std::shared_ptr<ModelCache> cache = cache_;
   trace_job_ = std::make_unique<BackgroundJob<ModelTrace>>(
@@ -514,58 +476,6 @@ void ViewerState::update_jobs() {
         control.check();
         return services->trace(*model, request, control);
       });
-}
-
-void ViewerState::ensure_render_data() {
-  if (doc_ && (!doc_->data || data_stale_)) {
-    render::ViewSpec build = view_;
-    build.layers.level_points = true;  // points are always prepared so they can be picked
-    build.picked_point = -1;
-    build.frame = 0;
-    build.level = 0;
-    doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
-    // The sampling voxel may have changed: level views are drawn anew.
-    doc_->levels.reset();
-    if (trace_ && is_level_view(*trace_)) {
-      trace_.reset();
-      trace_data_.reset();
-    }
-    level_view_failed_ = -1;
-  }
-  data_stale_ = false;
-  ensure_level_view();
-}
-
-void ViewerState::ensure_level_view() {
-  const bool wanted = level_view_wanted_;
-  level_view_wanted_ = false;
-  if (!doc_ || !checkpoint_.empty() || trace_from_file_ ||
-      view_.frame >= doc_->scene.num_frames()) {
-    return;
-  }
-  if (!wanted && view_.picked_point < 0 && !render::view_needs_levels(view_)) return;
-  const ModelConfig config = render::level_view_config(doc_->scene, view_);
-  if (level_view_failed_ == view_.frame &&
-      (!doc_->levels || doc_->levels->config().input == config.input)) {
-    return;
-  }
-  std::shared_ptr<const ModelTrace> levels;
-  bool other_points = false;  // points of another input (mesh vertices vs samples)
-  try {
-    if (!doc_->levels || doc_->levels->config().input != config.input) {
-      other_points = doc_->levels != nullptr;
-      doc_->levels = render::make_level_views(doc_->scene, view_);
-    }
-    levels = doc_->levels->at(view_.frame);
-  } catch (...) {
-    level_view_failed_ = view_.frame;
-    // Mesh input fails on a scene it cannot read (deformable objects): the layer goes off.
-    view_.layers.interaction_points = false;
-    throw;
-  }
-  if (trace_ == levels && trace_level_ == view_.level) return;
-  install_trace(levels, view_.level, -1);
-  if (other_points || view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
 }
 
 }  // namespace dynscope::app::viewer

@@ -40,6 +40,10 @@ struct Selection {
   bool empty() const { return set == PickSet::kNone; }
 };
 
+/// What a checkpoint's trace reads while a rollout is shown: the rollout's own predicted frames
+/// (the pass that produced the next predicted frame) or the scene's ground truth at that frame.
+enum class TraceInput { kPrediction, kTruth };
+
 /// Playback state of the timeline.
 struct Timeline {
   bool playing = false;
@@ -134,6 +138,15 @@ class ViewerState {
   const ModelTrace* shown_trace() const;
   /// The trace held (possibly of another frame or level), or null.
   const ModelTrace* held_trace() const { return trace_.get(); }
+  /// What traces read while a rollout is shown (default: its prediction). Changing it asks for a
+  /// new trace.
+  void set_trace_input(TraceInput input);
+  TraceInput trace_input() const { return trace_input_; }
+  /// True when the checkpoint's traces read the shown rollout's predicted frames.
+  bool traces_rollout() const;
+  /// With a rollout-state trace shown: the hierarchy the same model builds from the ground truth
+  /// at that frame (no forward pass), to compare the neighbour lists with; else null.
+  const ModelTrace* truth_input_levels() const { return truth_levels_.get(); }
   bool trace_from_file() const { return trace_from_file_; }
   int trace_level() const { return trace_level_; }
   /// Level point whose filter weights the held trace carries (-1 none).
@@ -255,12 +268,15 @@ class ViewerState {
   std::unique_ptr<render::SceneRenderData> trace_data_;  ///< Built from trace_ at trace_level_.
   struct TraceWant {
     int frame = -1, level = -1, picked = -1;
+    bool rollout = false;  ///< Reads the shown rollout's prediction.
     bool operator==(const TraceWant& o) const {
-      return frame == o.frame && level == o.level && picked == o.picked;
+      return frame == o.frame && level == o.level && picked == o.picked && rollout == o.rollout;
     }
   };
-  TraceWant trace_request_;  ///< What trace_job_ captures.
-  TraceWant trace_failed_;   ///< Last request that failed (not retried until it changes).
+  TraceInput trace_input_ = TraceInput::kPrediction;
+  std::shared_ptr<const ModelTrace> truth_levels_;  ///< See truth_input_levels().
+  TraceWant trace_request_;                         ///< What trace_job_ captures.
+  TraceWant trace_failed_;  ///< Last request that failed (not retried until it changes).
   /// A finished rollout job's payload: results plus what installing them needs (copied at start).
   struct RolloutJobInput {
     std::optional<Scene> scene;          ///< Scene the rollouts ran on.

@@ -9,6 +9,7 @@
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
 #include "engine/rollout/level_view.h"
+#include "engine/rollout/state_history.h"
 
 namespace dynscope {
 
@@ -170,13 +171,10 @@ ModelTrace capture_trace(const std::string& checkpoint_path, const Scene& scene,
   return t;
 }
 
-int first_rollout_trace_frame(const Rollout& rollout) {
-  return std::max(2, rollout.observed_frames - 1);
-}
-
 ModelTrace capture_rollout_trace(const std::string& checkpoint_path, const Rollout& rollout,
                                  int frame, const std::vector<int>& queries) {
-  const int first = first_rollout_trace_frame(rollout), last = rollout.num_frames() - 2;
+  const int first = first_rollout_trace_frame(rollout.observed_frames);
+  const int last = rollout.num_frames() - 2;
   if (frame < first || frame > last) {
     throw ValueError("frame", std::to_string(frame) + " outside [" + std::to_string(first) + ", " +
                                   std::to_string(last) +

@@ -23,15 +23,11 @@ namespace dynscope {
 ModelTrace capture_trace(const std::string& checkpoint_path, const Scene& scene,
                          const ModelPoints& points, int frame, const std::vector<int>& queries);
 
-/// The first frame t of `rollout` whose pass capture_rollout_trace can record: the pass at t
-/// produced frame t+1, so t ≥ observed_frames − 1 (and t ≥ 2, the state reads t−2).
-int first_rollout_trace_frame(const Rollout& rollout);
-
 /// The forward pass that produced frame `frame`+1 of `rollout`, recorded from the rollout's own
 /// predicted frames t−2..t (its object ids and, for mesh input, faces) as capture_trace records
 /// a scene's: source kTraceSourceRollout, scene_path the rollout's scene. `queries` index the
 /// rollout's points. Throws ValueError for a frame outside [first_rollout_trace_frame,
-/// T−2] or a query outside the points, and as capture_trace.
+/// T−2] (state_history.h) or a query outside the points, and as capture_trace.
 ModelTrace capture_rollout_trace(const std::string& checkpoint_path, const Rollout& rollout,
                                  int frame, const std::vector<int>& queries);
 

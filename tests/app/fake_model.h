@@ -15,6 +15,7 @@
 #include "engine/core/error.h"
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
+#include "engine/model/model_config.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/rollout_runner.h"
 
@@ -75,6 +76,13 @@ class FakeModel : public ModelServices {
     TraceLevel l;
     l.points = cloud.positions(scene, frame);
     l.object_ids = cloud.object_id;
+    t.model_config = ModelConfig::preset("physion").to_json();
+    if (request.rollout) {  // the rollout's own prediction, as the engine's model reads it
+      t.source = kTraceSourceRollout;
+      t.rollout_path = request.rollout_path;
+      l.points = request.rollout->predicted[static_cast<size_t>(frame)];
+      l.object_ids = request.rollout->object_ids;
+    }
     l.radius = 0.2;
     const NeighborList same = knn_same_object(l.points, l.object_ids, l.points, l.object_ids, kK);
     const NeighborList rel =

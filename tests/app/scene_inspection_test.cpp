@@ -178,5 +178,31 @@ TEST(SceneInspection, LevelCountsShrinkAndSumPerObject) {
   EXPECT_THROW(render::make_level_views(s, level_view(0))->at(9), ValueError);
 }
 
+TEST(SceneInspection, NeighbourListsOfTwoInputsAreCompared) {
+  auto trace = [](const std::vector<int32_t>& row0) {
+    ModelTrace t;
+    TraceLevel l;
+    l.points = Points::Zero(4, 3);
+    l.object_ids = {0, 0, 0, 0};
+    TraceList same{"same", 0, 0, IndexMatrix(4, 3), MaskMatrix(4, 3)};
+    same.index.setConstant(-1);
+    same.mask.setZero();
+    for (size_t k = 0; k < row0.size(); ++k) {
+      same.index(0, static_cast<Eigen::Index>(k)) = row0[k];
+      same.mask(0, static_cast<Eigen::Index>(k)) = 1;
+    }
+    l.lists.push_back(same);
+    t.levels.push_back(l);
+    return t;
+  };
+  const ModelTrace predicted = trace({0, 1, 2}), truth = trace({0, 2, 3});
+  const ListDifference d = neighbor_difference(predicted, truth, LevelList::kSame, 0);
+  EXPECT_EQ(d.only_a, (std::vector<int>{1})) << "the point itself is never a difference";
+  EXPECT_EQ(d.only_b, (std::vector<int>{3}));
+  const ListDifference none = neighbor_difference(predicted, truth, LevelList::kRelational, 0);
+  EXPECT_TRUE(none.only_a.empty() && none.only_b.empty()) << "no relational list in either";
+  EXPECT_TRUE(neighbor_difference(predicted, predicted, LevelList::kSame, 0).only_a.empty());
+}
+
 }  // namespace
 }  // namespace dynscope::app::viewer

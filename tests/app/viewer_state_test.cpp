@@ -16,6 +16,7 @@
 #include "engine/io/trace_file.h"
 #include "engine/model/model_config.h"
 #include "engine/rollout/rollout_runner.h"
+#include "engine/rollout/state_history.h"
 #include "fake_model.h"
 #include "viewer_test_util.h"
 
@@ -289,6 +290,46 @@ TEST(ViewerState, AMeshFileSaysWhatItIsAndKeepsTheScene) {
     EXPECT_NE(what.find("--meshes"), std::string::npos) << what;
   }
   EXPECT_EQ(s.document().path, testing::collide_scene());
+}
+
+// With a rollout shown, the checkpoint's trace reads the rollout's own predicted frames (the pass
+// that produced the next one); the inspector can switch to the ground truth and compare lists.
+TEST(ViewerState, TracesOfARolloutReadItsOwnPrediction) {
+  FakeModel model;
+  ViewerState s(&model);
+  s.open_scene(testing::collide_scene());
+  const Scene scene = s.document().scene;
+  Rollout r = cv_rollout(scene, testing::collide_scene());
+  // Make the prediction differ from the truth so the two inputs can be told apart.
+  for (size_t f = static_cast<size_t>(r.observed_frames); f < r.predicted.size(); ++f) {
+    r.predicted[f].col(0).array() += 0.01 * static_cast<double>(f);
+  }
+  s.set_rollout(r, "r", &scene);
+  s.set_checkpoint("fake.pt");
+  s.set_frame(10);
+  settle(s);
+  ASSERT_TRUE(s.traces_rollout());
+  const ModelTrace* t = s.shown_trace();
+  ASSERT_NE(t, nullptr);
+  EXPECT_EQ(t->source, kTraceSourceRollout);
+  EXPECT_EQ(t->frame, 10);
+  EXPECT_EQ(t->levels[0].points, r.predicted[10]);
+  ASSERT_NE(s.truth_input_levels(), nullptr) << "the truth's hierarchy, to compare lists with";
+  EXPECT_EQ(s.truth_input_levels()->levels[0].points, r.truth[10]);
+  // Frames without a pass of their own: the first that predicted a frame, the one before the last.
+  s.set_frame(0);
+  EXPECT_EQ(s.trace_frame(), first_rollout_trace_frame(r.observed_frames));
+  s.set_frame(r.num_frames() - 1);
+  EXPECT_EQ(s.trace_frame(), r.num_frames() - 2);
+  // The ground-truth input: the held rollout trace is no longer shown, a scene trace replaces it.
+  s.set_frame(10);
+  s.set_trace_input(TraceInput::kTruth);
+  EXPECT_FALSE(s.traces_rollout());
+  EXPECT_EQ(s.shown_trace(), nullptr);
+  settle(s);
+  ASSERT_NE(s.shown_trace(), nullptr);
+  EXPECT_EQ(s.shown_trace()->source, kTraceSourceScene);
+  EXPECT_EQ(s.truth_input_levels(), nullptr);
 }
 
 }  // namespace

@@ -1,0 +1,145 @@
+// ViewerState: the levels and traces the level browser, inspector and picking read (the
+// model's trace of the current frame, or without a checkpoint its level view).
+#include <algorithm>
+
+#include "app/viewer/viewer_state.h"
+#include "engine/core/error.h"
+#include "engine/model/hierarchy.h"
+#include "engine/model/model_config.h"
+#include "engine/rollout/level_view.h"
+#include "engine/rollout/state_history.h"
+
+namespace dynscope::app::viewer {
+
+int ViewerState::trace_frame() const {
+  if (checkpoint_.empty()) return view_.frame;
+  if (traces_rollout()) {
+    // The pass at t produced the rollout's frame t+1: from the first predicted frame's to the last.
+    const Rollout& r = rollout_->rollout;
+    return std::clamp(view_.frame, first_rollout_trace_frame(r.observed_frames),
+                      std::max(r.num_frames() - 2, first_rollout_trace_frame(r.observed_frames)));
+  }
+  return std::max(view_.frame, kFirstTraceableFrame);
+}
+
+bool ViewerState::traces_rollout() const {
+  return trace_input_ == TraceInput::kPrediction && rollout_ && doc_ && !trace_from_file_ &&
+         !checkpoint_.empty() &&
+         rollout_->num_frames() - 2 >= first_rollout_trace_frame(rollout_->rollout.observed_frames);
+}
+
+void ViewerState::set_trace_input(TraceInput input) {
+  if (input == trace_input_) return;
+  trace_input_ = input;
+  if (view_.level > 0) view_.picked_point = -1;  // the other input has other level points
+}
+
+int ViewerState::level_frame() const { return shown_trace() ? trace_->frame : view_.frame; }
+
+int ViewerState::num_levels() const {
+  // The model's own count: the trace's levels, else those of the config whose hierarchy the level
+  // browser shows for this scene.
+  if (trace_) return static_cast<int>(trace_->levels.size());
+  if (doc_) return level_view_config(doc_->scene).levels;
+  return ModelConfig{}.levels;
+}
+
+std::vector<LevelCount> ViewerState::level_counts() const {
+  if (const ModelTrace* trace = shown_trace()) return trace_level_counts(*trace);
+  return {};
+}
+
+void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked) {
+  render::ViewSpec build = view_;
+  build.level = level;
+  build.layers.level_points = true;
+  build.layers.ground_truth = true;  // the "all points" layer stays available
+  build.picked_point = -1;
+  build.frame = trace->frame;
+  trace_data_ = std::make_unique<render::SceneRenderData>(doc_->scene, build, trace);
+  truth_levels_.reset();
+  if (trace->source == kTraceSourceRollout && rollout_ &&
+      trace->frame < rollout_->rollout.num_frames()) {
+    // The same model's hierarchy on the ground truth of the frame, to compare the lists with.
+    const Rollout& r = rollout_->rollout;
+    const ModelConfig config = ModelConfig::from_json(trace->model_config, "trace");
+    const Points& truth = r.truth[static_cast<size_t>(trace->frame)];
+    truth_levels_ = std::make_shared<const ModelTrace>(
+        hierarchy_trace(build_model_hierarchy(truth, r.object_ids, r.faces, config), r.faces,
+                        trace->frame, config));
+  }
+  trace_ = std::move(trace);
+  trace_level_ = level;
+  trace_picked_ = picked;
+}
+
+const ModelTrace* ViewerState::shown_trace() const {
+  if (!trace_ || !trace_data_ || trace_->frame != trace_frame() || trace_level_ != view_.level) {
+    return nullptr;
+  }
+  // A checkpoint's trace of the other input (prediction vs truth) is not what was asked for.
+  if (!checkpoint_.empty() && !trace_from_file_ &&
+      (trace_->source == kTraceSourceRollout) != traces_rollout()) {
+    return nullptr;
+  }
+  return trace_.get();
+}
+
+const render::SceneRenderData* ViewerState::active_data() const {
+  if (shown_trace()) return trace_data_.get();
+  return doc_ ? doc_->data.get() : nullptr;
+}
+
+void ViewerState::ensure_render_data() {
+  if (doc_ && (!doc_->data || data_stale_)) {
+    render::ViewSpec build = view_;
+    build.layers.level_points = true;  // points are always prepared so they can be picked
+    build.picked_point = -1;
+    build.frame = 0;
+    build.level = 0;
+    doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
+    // The sampling voxel may have changed: level views are drawn anew.
+    doc_->levels.reset();
+    if (trace_ && is_level_view(*trace_)) {
+      trace_.reset();
+      trace_data_.reset();
+    }
+    level_view_failed_ = -1;
+  }
+  data_stale_ = false;
+  ensure_level_view();
+}
+
+void ViewerState::ensure_level_view() {
+  const bool wanted = level_view_wanted_;
+  level_view_wanted_ = false;
+  if (!doc_ || !checkpoint_.empty() || trace_from_file_ ||
+      view_.frame >= doc_->scene.num_frames()) {
+    return;
+  }
+  if (!wanted && view_.picked_point < 0 && !render::view_needs_levels(view_)) return;
+  const ModelConfig config = render::level_view_config(doc_->scene, view_);
+  if (level_view_failed_ == view_.frame &&
+      (!doc_->levels || doc_->levels->config().input == config.input)) {
+    return;
+  }
+  std::shared_ptr<const ModelTrace> levels;
+  bool other_points = false;  // points of another input (mesh vertices vs samples)
+  try {
+    if (!doc_->levels || doc_->levels->config().input != config.input) {
+      other_points = doc_->levels != nullptr;
+      doc_->levels = render::make_level_views(doc_->scene, view_);
+    }
+    levels = doc_->levels->at(view_.frame);
+  } catch (...) {
+    level_view_failed_ = view_.frame;
+    // Mesh input fails on a scene it cannot read (deformable objects): the layer goes off.
+    view_.layers.interaction_points = false;
+    throw;
+  }
+  if (trace_ == levels && trace_level_ == view_.level) return;
+  install_trace(levels, view_.level, -1);
+  if (other_points || view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
+}
+
+}  // namespace dynscope::app::viewer
