@@ -338,8 +338,14 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
              ": the validation split is empty (or --val-scenes 0); validation is skipped");
   }
 
+  // Initialisation draws from LibTorch's one global generator: ranks that share a process (the
+  // tests run two as threads) must not interleave their draws, or rank 0's weights would depend
+  // on timing.
+  static std::mutex init_mutex;
+  std::unique_lock<std::mutex> init_lock(init_mutex);
   torch::manual_seed(o.seed);
   DynamicsModel model(o.model);
+  init_lock.unlock();
   const std::string config_json = model->config().to_json();
   torch::optim::Adam optimizer(model->parameters(), torch::optim::AdamOptions(o.lr));
   int64_t step = 0;
