@@ -34,6 +34,16 @@ std::string level_caption(const ViewerState& state) {
          " (the first the model can trace)";
 }
 
+// `v` without what only the model's hierarchy can draw while the level data has none yet (a
+// checkpoint's trace still being captured): the pick's neighbourhoods and interaction points.
+render::ViewSpec drawable(const ViewerState& state, render::ViewSpec v) {
+  if (state.active_data()->trace() == nullptr) {
+    v.picked_point = -1;
+    v.layers.interaction_points = false;
+  }
+  return v;
+}
+
 // The level layers (points, voxels, neighbourhoods, interaction points) over a rollout frame.
 void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
   const render::ViewSpec& view = state.view();
@@ -45,7 +55,7 @@ void add_scene_layers(const ViewerState& state, render::RenderScene& out) {
   }
   render::ViewSpec v = view;
   v.layers.grid = v.layers.meshes = v.layers.ground_truth = v.layers.prediction = false;
-  render::RenderScene levels = state.active_data()->frame(state.level_frame(), v);
+  render::RenderScene levels = state.active_data()->frame(state.level_frame(), drawable(state, v));
   out.points.insert(out.points.end(), levels.points.begin(), levels.points.end());
   out.lines.insert(out.lines.end(), levels.lines.begin(), levels.lines.end());
   out.boxes.insert(out.boxes.end(), levels.boxes.begin(), levels.boxes.end());
@@ -127,6 +137,7 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
     render::ViewSpec v = view;
     // The selection indexes the model trace's level; without it there is nothing to show.
     if (!state.checkpoint().empty() && !state.shown_trace()) v.picked_point = -1;
+    v = drawable(state, v);
     Viewport p{
         state.active_data()->frame(state.level_frame(), v), camera, full, level_caption(state), {}};
     // The level's own layer is the selectable one; the rest (all points, edges) are context.

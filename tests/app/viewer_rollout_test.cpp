@@ -270,6 +270,40 @@ TEST(ViewerRollout, TraceDrivesTheInspector) {
   EXPECT_TRUE(app.last_error().empty()) << app.last_error();
 }
 
+// A saved view with a picked point and the level layers, opened over a rollout while the
+// checkpoint's trace is still being captured: the frame draws without the neighbourhood (it has
+// no lists yet), never an error, and with them once the trace arrives.
+TEST(ViewerRollout, APickWaitsForTheTraceWithoutErrors) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerApp& app = v.app;
+  app.state().open_scene(testing::collide_scene());
+  const Scene scene = app.state().document().scene;
+  app.state().set_rollout(cv_rollout(scene, testing::collide_scene()), "r", &scene);
+  app.state().set_checkpoint("fake.pt");
+  model.hold();
+  render::ViewSpec view = app.state().current_view();
+  view.frame = 12;
+  view.picked_point = 3;
+  view.layers.level_points = true;
+  view.layers.neighborhoods = true;
+  view.layers.interaction_points = true;
+  app.state().set_view(view);
+  for (int i = 0; i < 3; ++i) app.frame();
+  EXPECT_EQ(app.error_count(), 0) << app.last_error();
+  EXPECT_EQ(app.state().shown_trace(), nullptr);
+  model.release();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((app.state().busy() || !app.state().shown_trace()) &&
+         std::chrono::steady_clock::now() < end) {
+    app.frame();
+  }
+  ASSERT_NE(app.state().shown_trace(), nullptr);
+  EXPECT_EQ(app.state().shown_trace()->source, kTraceSourceRollout);
+  app.frame();
+  EXPECT_EQ(app.error_count(), 0) << app.last_error();
+}
+
 TEST(ViewerRollout, WhatIfRunsInTheBackground) {
   FakeModel model;
   HeadlessViewer v(&model);
