@@ -96,4 +96,14 @@ Color categorical_color(int64_t id) {
   return Color(c[0] * shade, c[1] * shade, c[2] * shade);
 }
 
+std::vector<float> categorical_colors(const std::vector<int32_t>& ids) {
+  std::vector<float> colors;
+  colors.reserve(ids.size() * 3);
+  for (int32_t id : ids) {
+    const Color c = categorical_color(id);
+    colors.insert(colors.end(), {c.x(), c.y(), c.z()});
+  }
+  return colors;
+}
+
 }  // namespace dynscope::render

@@ -22,5 +22,7 @@ std::vector<uint8_t> colormap_table(const std::string& name);
 /// Colour of category `id` (an object id): the 10-colour Tableau palette, cycled, then darkened
 /// every cycle so ids 0..29 stay distinct. Negative ids are grey.
 Color categorical_color(int64_t id);
+/// categorical_color of every id, packed RGB `[3 * ids.size()]` (a PointSeries' colours).
+std::vector<float> categorical_colors(const std::vector<int32_t>& ids);
 
 }  // namespace dynscope::render
