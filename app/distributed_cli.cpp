@@ -62,10 +62,6 @@ void add_distributed_options(CLI::App* cmd, DistributedArgs& a, const std::strin
       ->check(CLI::Range(1, 86400));
 }
 
-std::optional<DistributedOptions> rank_environment() {
-  return DistributedOptions::from_environment();
-}
-
 void launch_command_ranks(const DistributedArgs& args, int nproc, bool threads_given, int threads) {
   const int cores = available_cores();
   if (!threads_given) threads = std::max(1, cores / nproc);

@@ -3,10 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <optional>
 #include <string>
-
-#include "engine/train/process_group.h"
 
 namespace dynscope::app {
 
@@ -24,9 +21,6 @@ struct DistributedArgs {
 
 /// Adds the options to `cmd` (`what` names the work in their help, e.g. "training").
 void add_distributed_options(CLI::App* cmd, DistributedArgs& args, const std::string& what);
-
-/// This process's place in a job when it was started as a rank (the torchrun variables are set).
-std::optional<DistributedOptions> rank_environment();
 
 /// Runs this command's `nproc` ranks on this machine (the command line without the launcher's
 /// options, plus `--threads T` with the cores shared out when `threads_given` is false) and

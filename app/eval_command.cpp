@@ -17,6 +17,7 @@
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/evaluation.h"
 #include "engine/rollout/model_predictor.h"
+#include "engine/train/process_group.h"
 #include "engine/train/train_options.h"
 
 namespace dynscope::app {
@@ -57,8 +58,8 @@ void run_eval_rank(const EvalArgs& args, const DistributedOptions& dist, const D
   for (size_t i = static_cast<size_t>(group.rank()); i < split.items.size();
        i += static_cast<size_t>(world)) {
     double voxel = 0.0, threshold = 0.0;
-    const SceneEvaluation e = evaluate_scene(split.items[i], model.predict, options, &voxel,
-                                             &threshold);
+    const SceneEvaluation e =
+        evaluate_scene(split.items[i], model.predict, options, &voxel, &threshold);
     mine["voxel"] = voxel;
     mine["threshold"] = threshold;
     mine["scenes"].push_back({{"index", i}, {"result", scene_evaluation_to_json(e)}});
@@ -108,8 +109,9 @@ void run_eval(const EvalArgs& args) {
   for (const DatasetItem& item : split.items) inputs.push_back({"dataset scene", item.path});
   require_output_directory("--json", args.json);
   require_distinct_output("--json", args.json, inputs);
-  const int ranks = args.dist.nproc * args.dist.nnodes;
-  if (!rank_environment() && ranks > 1) {
+  // Started as a rank (launcher, torchrun or srun), or the launcher of ranks, or one process.
+  const std::optional<DistributedOptions> dist = DistributedOptions::from_environment();
+  if (!dist && args.dist.nproc * args.dist.nnodes > 1) {
     launch_command_ranks(args.dist, args.dist.nproc, args.dist.cmd->count("--threads") > 0,
                          args.threads);
     return;
@@ -123,7 +125,7 @@ void run_eval(const EvalArgs& args) {
   options.contact_threshold = args.threshold;
   options.threshold_fraction = args.threshold_fraction;
   options.baseline = !args.no_baseline;
-  if (const std::optional<DistributedOptions> dist = rank_environment()) {
+  if (dist) {
     run_eval_rank(args, *dist, split, model, options);
     return;
   }

@@ -149,7 +149,7 @@ void run_rank(const TrainOptions& options, const DistributedOptions& dist) {
 
 void run_train(const TrainArgs& args) {
   const TrainOptions options = build_options(args);
-  if (const std::optional<DistributedOptions> dist = rank_environment()) {
+  if (const std::optional<DistributedOptions> dist = DistributedOptions::from_environment()) {
     run_rank(options, *dist);
     return;
   }

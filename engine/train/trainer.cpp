@@ -26,8 +26,8 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/temp_file.h"
 #include "engine/model/checkpoint.h"
-#include "engine/rollout/dataset_split.h"
 #include "engine/model/torch_runtime.h"
+#include "engine/rollout/dataset_split.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/train/process_group_torch.h"
@@ -323,7 +323,8 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     for (const DatasetItem& item : split.items) train.push_back(load_scene(item.path, o.sampling));
   }
   // Validation scenes are taken round-robin over the datasets so each scenario is represented.
-  for (size_t i = 0; static_cast<int>(val.size()) < o.val_scenes; ++i) {
+  // Rank 0 alone validates, so only it reads them.
+  for (size_t i = 0; leader && static_cast<int>(val.size()) < o.val_scenes; ++i) {
     bool any = false;
     for (const DatasetSplit& split : val_splits) {
       if (i >= split.items.size() || static_cast<int>(val.size()) >= o.val_scenes) continue;
@@ -332,7 +333,6 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     }
     if (!any) break;
   }
-  if (!leader) val.clear();  // rank 0 validates
   if (val.empty() && leader) {
     log_warn(o.data_dirs.front(),
              ": the validation split is empty (or --val-scenes 0); validation is skipped");
