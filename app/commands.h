@@ -23,6 +23,8 @@ void add_rollout_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 /// `dynscope trace`: record one forward pass of a checkpoint into an HDF5 trace file.
 void add_trace_command(CLI::App& app);
+/// `dynscope explain`: divergence and gradient × input attribution of a rollout pass.
+void add_explain_command(CLI::App& app);
 /// `dynscope view [SCENE.h5]`: the interactive viewer, or a headless UI screenshot.
 void add_view_command(CLI::App& app);
 

@@ -11,6 +11,7 @@
 
 #include "app/cli_util.h"
 #include "app/commands.h"
+#include "app/explain_run.h"
 #include "engine/core/error.h"
 #include "engine/core/log.h"
 #include "engine/io/rollout_file.h"
@@ -82,6 +83,47 @@ void require_trace_selection(const ModelTrace& trace, const render::BatchRenderO
   }
 }
 
+// --explain: explains the rollout's divergence (or the chosen frame, object or point) and draws
+// the pass's frame with every point coloured by its share.
+void prepare_explanation(render::BatchRenderOptions& options, const std::string& checkpoint,
+                         const std::string& object, int point, const std::string& target) {
+  if (checkpoint.empty())
+    throw ValueError("--explain", "needs --checkpoint (the model to explain)");
+  if (!options.trace_path.empty()) throw ValueError("--explain", "give --trace or --explain");
+  require_readable_file(options.scene_path);
+  if (!is_rollout_file(options.scene_path)) {
+    throw ValueError("--explain", "explains a rollout: " + options.scene_path + " is a scene file");
+  }
+  ExplainRequest request;
+  request.checkpoint = checkpoint;
+  request.rollout_path = options.scene_path;
+  request.object = object;
+  request.point = point;
+  request.target = parse_explain_target(target);
+  if (!options.frames.empty()) {
+    const auto [first, last] =
+        render::parse_frame_range(options.frames, read_rollout(options.scene_path).num_frames());
+    if (first != last) throw ValueError("--frames", "with --explain give one frame (one pass)");
+    request.frame = first;
+  }
+  const ExplainRun run = explain_checkpoint_rollout(request);
+  const Explanation& e = run.explanation;
+  options.frames = std::to_string(e.frame);
+  auto attribution = std::make_shared<render::PointAttribution>();
+  attribution->shares.assign(e.point_shares.begin(), e.point_shares.end());
+  attribution->explained = e.points;
+  options.attribution = attribution;
+  char line[256];
+  std::snprintf(line, sizeof(line), "explained: %s, pass %d -> frame %d, error %.4g (%+.4g)",
+                explained_subject(e, run.names).c_str(), e.frame, e.frame + 1, e.error,
+                e.error_growth);
+  std::vector<std::string>& legend = options.attribution_legend;
+  legend = {line, "colour: share of |grad x input| of its edges (grey: none); halo: explained"};
+  const std::vector<std::string> lines = contributor_lines(e, run.names, 5);
+  legend.insert(legend.end(), lines.begin(), lines.end());
+  for (const std::string& l : legend) std::printf("%s\n", l.c_str());
+}
+
 }  // namespace
 
 void add_render_command(CLI::App& app) {
@@ -89,6 +131,10 @@ void add_render_command(CLI::App& app) {
   auto size = std::make_shared<std::string>();
   auto backend = std::make_shared<std::string>("osmesa");
   auto checkpoint = std::make_shared<std::string>();
+  auto explain = std::make_shared<bool>(false);
+  auto explain_object = std::make_shared<std::string>();
+  auto explain_point = std::make_shared<int>(-1);
+  auto explain_target = std::make_shared<std::string>("error");
   CLI::App* cmd = app.add_subcommand(
       "render",
       "Render the frames of a scene or a rollout off-screen (OSMesa, no display needed): one PNG "
@@ -101,7 +147,10 @@ void add_render_command(CLI::App& app) {
       "level-below points pooled into it and fed by it, and the learned filter |h(p_k - p_0)|\n"
       "as neighbour colour. Without either, they are the model's hierarchy at each rendered\n"
       "frame as the scenario's preset builds it (the same lists, no filter weights; mesh input\n"
-      "when the view shows interaction points).");
+      "when the view shows interaction points).\n"
+      "With a rollout, --checkpoint and --explain it draws the pass `dynscope explain` picks\n"
+      "(the divergence, or --frames T / --object / --point) with every point coloured by its\n"
+      "share of the attribution and the explained points under a halo.");
   cmd->add_option("input", options->scene_path, "SCENE.h5|ROLLOUT.h5: scene or rollout file (HDF5)")
       ->required();
   cmd->add_option("--view", options->view_path, "View spec JSON (camera, layers, colormap, ...)");
@@ -121,6 +170,14 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--pick", options->picked_point,
                   "Show the neighbourhoods of this point of the level (its index there)")
       ->each(mark("--pick"));
+  cmd->add_flag("--explain", *explain,
+                "Rollouts with --checkpoint: colour the points by what made the prediction go "
+                "wrong (see `dynscope explain`)");
+  cmd->add_option("--object", *explain_object, "With --explain: the object (name or id)");
+  cmd->add_option("--point", *explain_point, "With --explain: one rollout point instead")
+      ->check(unsigned_integer());
+  cmd->add_option("--target", *explain_target, "With --explain: error or acceleration")
+      ->capture_default_str();
   cmd->add_option("--size", *size, "Image size WxH, overriding the view (e.g. 1280x720)");
   cmd->add_option("--out", options->out_dir, "Output directory")->required();
   cmd->add_option("--context", *backend, "GL context: osmesa (headless) or glfw (hidden window)")
@@ -129,7 +186,8 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag(
       "--no-video", [options](int64_t) { options->video = false; }, "Skip the MP4");
-  cmd->callback([options, size, backend, checkpoint, given] {
+  cmd->callback([options, size, backend, checkpoint, given, explain, explain_object, explain_point,
+                 explain_target] {
     auto was_given = [&](const char* name) {
       return std::find(given->begin(), given->end(), name) != given->end();
     };
@@ -153,13 +211,19 @@ void add_render_command(CLI::App& app) {
       options->width = w;
       options->height = h;
     }
+    if (!*explain && (!explain_object->empty() || *explain_point >= 0)) {
+      throw ValueError(explain_object->empty() ? "--point" : "--object", "needs --explain");
+    }
     std::unique_ptr<TempFile> trace_file;
-    if (!checkpoint->empty()) {
+    if (*explain) {
+      prepare_explanation(*options, *checkpoint, *explain_object, *explain_point, *explain_target);
+    } else if (!checkpoint->empty()) {
       if (!options->trace_path.empty()) {
         throw ValueError("--checkpoint", "give --checkpoint or --trace, not both");
       }
       if (is_rollout_file(options->scene_path)) {
-        throw ValueError("--checkpoint", "traces are drawn over scene files, not rollouts");
+        throw ValueError("--checkpoint",
+                         "traces are drawn over scene files; over a rollout, add --explain");
       }
       require_readable_file(options->scene_path);
       const Scene scene = read_scene(options->scene_path);

@@ -341,8 +341,12 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
     }
     return box;
   };
+  std::shared_ptr<PointSeries> attribution;
+  if (options.attribution) attribution = make_attribution_series(data, *options.attribution);
   std::vector<std::string> legend;
-  if (l.prediction) {
+  if (attribution) {
+    legend = options.attribution_legend;
+  } else if (l.prediction) {
     char text[96];
     const float lo = view.auto_range ? 0.0f : view.range_min;
     const float hi = view.auto_range ? std::max(data.max_error(), 1e-6f) : view.range_max;
@@ -362,7 +366,13 @@ BatchRenderResult render_rollout_file(GlContext& context, const BatchRenderOptio
   source.num_frames = num_frames;
   source.dt_s = data.rollout.dt_s;
   source.bounds = bounds;
-  source.frame = [&](int f, const ViewSpec& v) { return rollout_frame(data, f, v); };
+  source.frame = [&](int f, const ViewSpec& v) {
+    RenderScene drawn = rollout_frame(data, f, v);
+    if (attribution) {
+      add_attribution_layers(drawn, attribution, *options.attribution, f, data.point_radius);
+    }
+    return drawn;
+  };
   source.caption = [&](int f) {
     char text[128];
     std::snprintf(text, sizeof(text), "%s %s  mean error %.4g",

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "render/gl_context.h"
+#include "render/scene_adapter.h"
 #include "render/view_spec.h"
 
 namespace dynscope::render {
@@ -36,6 +37,10 @@ struct BatchRenderOptions {
   bool video = true;     ///< MP4 through ffmpeg when it is on PATH.
   int samples = 4;       ///< Multisampling (anti-aliasing).
   bool progress = true;  ///< Progress bar on stderr.
+  /// Rollouts: an explanation's shares drawn in place of the error colours (add_attribution_layers)
+  /// with `attribution_legend` as the caption's legend.
+  std::shared_ptr<const PointAttribution> attribution;
+  std::vector<std::string> attribution_legend;
 };
 
 /// What was written.

@@ -11,6 +11,8 @@ namespace dynscope::render {
 namespace {
 
 const Color kPredictionColor(0.95f, 0.45f, 0.10f);
+// Attribution shares below this fraction of the largest are drawn as "no share" (grey).
+constexpr float kNegligibleShare = 0.01f;
 
 }  // namespace
 
@@ -63,7 +65,7 @@ void add_comparison_layers(RenderScene& out, const ComparisonSeries& series, int
   };
   if (l.ground_truth) out.points.push_back(layer("truth", series.truth));
   if (l.prediction) {
-    PointLayer p = layer("prediction", series.prediction);
+    PointLayer p = layer(kPredictionLayer, series.prediction);
     if (l.error) {
       p.coloring = PointColoring::kScalar;
       p.colormap = view.colormap;
@@ -83,6 +85,71 @@ void add_comparison_layers(RenderScene& out, const ComparisonSeries& series, int
     ghost.pickable = false;
     out.points.push_back(ghost);
   }
+}
+
+std::shared_ptr<PointSeries> make_attribution_series(const RolloutRenderData& data,
+                                                     const PointAttribution& attribution) {
+  const PointSeries& prediction = *data.series.prediction;
+  const auto n = static_cast<size_t>(prediction.num_points);
+  if (attribution.shares.size() != n) {
+    throw ValueError("attribution", std::to_string(attribution.shares.size()) + " shares for " +
+                                        std::to_string(n) + " rollout points");
+  }
+  for (int i : attribution.explained) {
+    if (i < 0 || static_cast<size_t>(i) >= n) {
+      throw ValueError("attribution",
+                       "explained point " + std::to_string(i) + " is not a rollout point");
+    }
+  }
+  float largest = 0.0f;
+  for (float v : attribution.shares) {
+    if (!std::isfinite(v) || v < 0) throw ValueError("attribution", "shares must be >= 0");
+    largest = std::max(largest, v);
+  }
+  auto s = std::make_shared<PointSeries>();
+  s->num_frames = prediction.num_frames;
+  s->num_points = prediction.num_points;
+  s->positions = prediction.positions;
+  s->colors.reserve(3 * n);
+  const Color none(0.80f, 0.80f, 0.80f);
+  for (float v : attribution.shares) {
+    const float t = largest > 0 ? v / largest : 0.0f;
+    const Color c = t >= kNegligibleShare ? colormap("turbo", 0.1f + 0.9f * std::sqrt(t)) : none;
+    s->colors.insert(s->colors.end(), {c.x(), c.y(), c.z()});
+  }
+  return s;
+}
+
+void add_attribution_layers(RenderScene& out, const std::shared_ptr<PointSeries>& series,
+                            const PointAttribution& attribution, int frame, float radius) {
+  PointLayer layer;
+  layer.name = "attribution";
+  layer.series = series;
+  layer.frame = frame;
+  layer.radius = radius;
+  layer.coloring = PointColoring::kPerPoint;
+  const auto it = std::find_if(out.points.begin(), out.points.end(),
+                               [](const PointLayer& p) { return p.name == kPredictionLayer; });
+  if (it != out.points.end()) {
+    *it = layer;
+  } else {
+    out.points.push_back(layer);
+  }
+  if (attribution.explained.empty()) return;
+  std::vector<Points> halo(1, Points(static_cast<Eigen::Index>(attribution.explained.size()), 3));
+  for (size_t i = 0; i < attribution.explained.size(); ++i) {
+    halo[0].row(static_cast<Eigen::Index>(i)) =
+        series->position(frame, attribution.explained[i]).transpose();
+  }
+  PointLayer h;
+  h.name = "explained";
+  h.series = make_point_series(halo);
+  h.frame = 0;
+  h.radius = 1.6f * radius;
+  h.color = Color(0.10f, 0.75f, 0.95f);
+  h.opacity = 0.25f;
+  h.pickable = false;
+  out.points.push_back(h);
 }
 
 RolloutRenderData make_rollout_render_data(Rollout rollout, const Scene* scene,

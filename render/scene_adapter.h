@@ -71,9 +71,9 @@ class SceneRenderData {
     std::vector<int32_t> object;  ///< `[N_level]` object id per level point.
     NeighborList same;        ///< `[1,k]` same-object kNN of the picked point (itself included).
     NeighborList relational;  ///< `[1,k]` other-object kNN within level_radius().
-    /// Forward-pass traces only: ‖h(p_k − p_0)‖ of the first traced PointConv over each list entry (`[k]`,
-    /// 0 where masked), empty when the trace holds no filter weights for the point; the conv's
-    /// module path.
+    /// Forward-pass traces only: ‖h(p_k − p_0)‖ of the first traced PointConv over each list entry
+    /// (`[k]`, 0 where masked), empty when the trace holds no filter weights for the point; the
+    /// conv's module path.
     std::vector<double> same_weight, relational_weight;
     std::string same_conv, relational_conv;
     /// Level ≥ 1: level−1 points pooled into the picked point (down list) and the
@@ -176,5 +176,26 @@ RenderScene rollout_frame(const RolloutRenderData& data, int frame, const ViewSp
 /// translucent ghost of the other set when `layers.ghost`. `radius` is the sphere radius.
 void add_comparison_layers(RenderScene& out, const ComparisonSeries& series, int frame,
                            const ViewSpec& view, float radius);
+
+/// Name of the predicted points' layer in a rollout's RenderScene.
+inline constexpr const char* kPredictionLayer = "prediction";
+
+/// An explanation's per-point shares drawn over a rollout (plain data: the engine computes them).
+struct PointAttribution {
+  std::vector<float> shares;   ///< `[N]` each rollout point's share as a source (0: none).
+  std::vector<int> explained;  ///< Points whose prediction is explained (drawn under a halo).
+};
+
+/// The rollout's predicted points over all frames coloured by `attribution`: sources through the
+/// "turbo" colormap by share relative to the largest (square-root scaled, so small shares still
+/// show), points under 1 % of the largest light grey. Throws ValueError when the shares or
+/// explained points do not fit the rollout's points.
+std::shared_ptr<PointSeries> make_attribution_series(const RolloutRenderData& data,
+                                                     const PointAttribution& attribution);
+
+/// Draws `series` (make_attribution_series) at `frame` in place of the kPredictionLayer layer of
+/// `out` (appended when there is none) and the explained points under translucent halos.
+void add_attribution_layers(RenderScene& out, const std::shared_ptr<PointSeries>& series,
+                            const PointAttribution& attribution, int frame, float radius);
 
 }  // namespace dynscope::render

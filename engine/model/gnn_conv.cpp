@@ -39,8 +39,9 @@ torch::Tensor GnnConvImpl::forward_unfused(const torch::Tensor& query, const tor
           .to(torch::kFloat);
   const torch::Tensor xk = gather_neighbors(source_features, neighbors.index);
   const torch::Tensor x0 = query_features.unsqueeze(1).expand({m, k, c});
-  const torch::Tensor messages = edge_mlp->forward(torch::cat({x0, xk, rel}, -1)) *
-                                 neighbors.mask.unsqueeze(-1).to(torch::kFloat);
+  torch::Tensor messages = edge_mlp->forward(torch::cat({x0, xk, rel}, -1)) *
+                           neighbors.mask.unsqueeze(-1).to(torch::kFloat);
+  if (neighbors.gate.defined()) messages = messages * neighbors.gate.unsqueeze(-1);
   torch::Tensor agg = messages.sum(1);
   const torch::Tensor count = neighbors.mask.sum(1).to(torch::kFloat);
   if (options_.normalize()) agg = agg / count.clamp_min(1.0).unsqueeze(1);
@@ -67,8 +68,9 @@ torch::Tensor GnnConvImpl::forward(const torch::Tensor& query, const torch::Tens
                  torch::mm(source_features, w.narrow(1, c, c).t()),
                  torch::matmul(rel, w.narrow(1, 2 * c, 3).t()),
                  masked_index(neighbors));  // [M,K,hid]
-  const torch::Tensor messages =
+  torch::Tensor messages =
       edge_out->forward(torch::relu(pre)).relu_() * neighbors.mask.unsqueeze(-1);
+  if (neighbors.gate.defined()) messages = messages * neighbors.gate.unsqueeze(-1);
   torch::Tensor agg = messages.sum(1);
   if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);
   const torch::Tensor y = node_mlp->forward(torch::cat({query_features, agg}, -1));

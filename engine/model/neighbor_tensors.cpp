@@ -51,6 +51,7 @@ NeighborTensors NeighborTensors::to(const torch::Device& device) const {
     t.count = count.to(device);
     t.has_any = has_any.to(device);
   }
+  if (gate.defined()) t.gate = gate.to(device);
   return t;
 }
 

@@ -19,6 +19,11 @@ struct NeighborTensors {
   torch::Tensor rel;      ///< Prepared: p_k − p_0 float32 `[M,K,3]`, zero where masked.
   torch::Tensor count;    ///< Prepared: valid neighbours per row, float32 `[M]`.
   torch::Tensor has_any;  ///< Prepared: 1 where a row has a valid neighbour, float32 `[M,1]`.
+  /// Optional per-edge factor float32 `[M,K]` every convolution reading the list multiplies into
+  /// that edge's term (undefined: 1). Explanations set it to ones with gradients: ∂E/∂gate of an
+  /// edge is the first-order effect of its message on E (gradient × input, the input being the
+  /// edge's presence).
+  torch::Tensor gate;
 
   int64_t rows() const { return index.defined() ? index.size(0) : 0; }
   /// The nearest valid source of every row (column 0, clamped to 0 for fully masked rows), `[M]`.

@@ -51,8 +51,9 @@ torch::Tensor PointConvImpl::forward_unfused(const torch::Tensor& query,
           .to(torch::kFloat);
   torch::Tensor x = gather_neighbors(features, neighbors.index);  // [M,K,C_in]
   if (pos_embed) x = torch::cat({x, pos_embed->forward(rel)}, -1);
-  const torch::Tensor h =
+  torch::Tensor h =
       weightnet->forward(rel) * neighbors.mask.unsqueeze(-1).to(torch::kFloat);  // [M,K,c_mid]
+  if (neighbors.gate.defined()) h = h * neighbors.gate.unsqueeze(-1);
   torch::Tensor agg = torch::matmul(h.transpose(1, 2), x);  // [M,c_mid,C]: Σ_k h_k x_kᵀ
   const torch::Tensor count = neighbors.mask.sum(1).to(torch::kFloat);
   if (options_.normalize()) agg = agg / count.clamp_min(1.0).view({m, 1, 1});
@@ -74,7 +75,9 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
   const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
   const torch::Tensor edge = pos_embed ? pos_embed->forward(rel) : torch::Tensor();
   // The fused op skips masked neighbours, so h needs no mask here.
-  const torch::Tensor h = weightnet->forward(rel);  // [M,K,c_mid]
+  torch::Tensor h = weightnet->forward(rel);  // [M,K,c_mid]
+  // The edge term h_k x_kᵀ is linear in h_k, so a gate scales the whole message of edge k.
+  if (neighbors.gate.defined()) h = h * neighbors.gate.unsqueeze(-1);
   torch::Tensor agg =
       point_conv_aggregate(features, edge, h, masked_index(neighbors));  // [M,c_mid·C]
   if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);

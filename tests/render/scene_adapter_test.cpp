@@ -324,6 +324,55 @@ TEST(SceneAdapter, ComparisonCarriesPerPointErrors) {
   EXPECT_THROW(make_comparison_series({truth}, {truth}, {0}), ValueError);
 }
 
+TEST(SceneAdapter, AttributionReplacesThePredictionColours) {
+  Rollout r;
+  r.dt_s = 0.1;
+  r.observed_frames = 1;
+  r.rest = Points::Zero(3, 3);
+  r.object_ids = {1, 1, 2};
+  Points p(3, 3);
+  p << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  r.predicted = {p, p};
+  r.truth = {p, p};
+  r.poses.resize(2);
+  r.point_error = {0.0, 0.0};
+  const RolloutRenderData data = make_rollout_render_data(r, nullptr);
+  PointAttribution a;
+  a.shares = {0.0f, 0.75f, 0.25f};
+  a.explained = {0};
+  const auto series = make_attribution_series(data, a);
+  ASSERT_EQ(series->colors.size(), 9u);
+  // No share: light grey; the largest share: the colormap's top; a smaller one in between.
+  EXPECT_FLOAT_EQ(series->colors[0], series->colors[1]);
+  EXPECT_FLOAT_EQ(series->colors[1], series->colors[2]);
+  const Color top = colormap("turbo", 1.0f);
+  EXPECT_FLOAT_EQ(series->colors[3], top.x());
+  EXPECT_FLOAT_EQ(series->colors[5], top.z());
+  const Color mid = colormap("turbo", 0.1f + 0.9f * std::sqrt(0.25f / 0.75f));
+  EXPECT_FLOAT_EQ(series->colors[6], mid.x());
+  EXPECT_EQ(series->positions, data.series.prediction->positions);
+
+  ViewSpec view;
+  view.layers.error = true;
+  view.layers.ghost = true;
+  RenderScene out = rollout_frame(data, 1, view);
+  const size_t layers = out.points.size();
+  add_attribution_layers(out, series, a, 1, 0.05f);
+  ASSERT_EQ(out.points.size(), layers + 1) << "prediction replaced, a halo added";
+  for (const PointLayer& l : out.points) EXPECT_NE(l.name, kPredictionLayer);
+  const PointLayer& halo = out.points.back();
+  ASSERT_EQ(halo.series->num_points, 1);
+  EXPECT_FLOAT_EQ(halo.series->positions[0], 0.0f);
+  EXPECT_LT(halo.opacity, 1.0f);
+  EXPECT_NO_THROW(out.validate());
+
+  a.shares = {0.5f, 0.5f};
+  EXPECT_THROW(make_attribution_series(data, a), ValueError);
+  a.shares = {0.0f, 0.5f, 0.5f};
+  a.explained = {3};
+  EXPECT_THROW(make_attribution_series(data, a), ValueError);
+}
+
 TEST(SceneAdapter, GridSpacingIsRound) {
   Aabb box;
   box.extend(Vec3(-2, -1, 0));
