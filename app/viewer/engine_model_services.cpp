@@ -1,9 +1,12 @@
 // EngineModelServices: checkpoints loaded once and run through the engine's LibTorch code.
 #include "app/viewer/engine_model_services.h"
 
+#include <memory>
 #include <mutex>
 
 #include "app/cli_util.h"
+#include "engine/core/error.h"
+#include "engine/rollout/explain_report.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
@@ -19,6 +22,7 @@ class EngineCheckpoint : public LoadedCheckpoint {
   std::string path;
   LoadedModel model;
   SamplingOptions sampling;
+  std::unique_ptr<RolloutExplainer> explainer;  ///< Loaded on the first explanation.
   std::mutex mutex;
 };
 
@@ -59,6 +63,24 @@ ModelTrace EngineModelServices::trace(LoadedCheckpoint& loaded, const TraceReque
   }
   return app::capture_checkpoint_trace(c.path, *request.scene, request.scene_path, request.frame,
                                        request.level, request.picked);
+}
+
+RolloutExplanation EngineModelServices::explain(LoadedCheckpoint& loaded,
+                                                const ExplainJobRequest& request,
+                                                JobControl& control) {
+  auto& c = static_cast<EngineCheckpoint&>(loaded);
+  std::lock_guard<std::mutex> lock(c.mutex);
+  control.check();
+  if (!request.rollout) throw ValueError("explain", "no rollout to explain");
+  if (!c.explainer) c.explainer = std::make_unique<RolloutExplainer>(c.path);
+  RolloutExplanation out;
+  out.divergence = find_divergence(*request.rollout, c.explainer->config());
+  control.check();
+  const ExplainSelection selection =
+      resolve_selection(*request.rollout, out.divergence, request.frame, request.object,
+                        request.point, request.target, "frame");
+  out.explanation = c.explainer->explain(*request.rollout, selection);
+  return out;
 }
 
 }  // namespace dynscope::app::viewer

@@ -10,8 +10,8 @@
 namespace dynscope::app::viewer {
 
 /// Loads checkpoints with load_model (one per checkpoint, the viewer's ModelCache keeps it) and
-/// runs rollouts and traces with the engine's rollout runner and trace capture, one call at a
-/// time per model.
+/// runs rollouts, traces and explanations with the engine's rollout runner, trace capture and
+/// RolloutExplainer, one call at a time per model.
 class EngineModelServices : public ModelServices {
  public:
   std::shared_ptr<LoadedCheckpoint> load(const std::string& checkpoint) override;
@@ -19,6 +19,8 @@ class EngineModelServices : public ModelServices {
                   JobControl& control) override;
   ModelTrace trace(LoadedCheckpoint& model, const TraceRequest& request,
                    JobControl& control) override;
+  RolloutExplanation explain(LoadedCheckpoint& model, const ExplainJobRequest& request,
+                             JobControl& control) override;
 };
 
 }  // namespace dynscope::app::viewer

@@ -11,6 +11,8 @@
 
 #include "app/viewer/background_job.h"
 #include "engine/io/trace_file.h"
+#include "engine/rollout/divergence.h"
+#include "engine/rollout/explain.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/scene/rollout.h"
 #include "engine/scene/scene.h"
@@ -38,6 +40,23 @@ struct TraceRequest {
   std::string rollout_path;
 };
 
+/// One explanation the viewer wants: `checkpoint` on `rollout` at pass `frame` (−1: the
+/// divergence) of `object` or `point` (both −1: the diverging object; see resolve_selection).
+struct ExplainJobRequest {
+  std::string checkpoint;
+  std::shared_ptr<const Rollout> rollout;
+  int frame = -1;
+  int32_t object = -1;
+  int point = -1;
+  ExplainTarget target = ExplainTarget::kError;
+};
+
+/// What an explain job returns: the rollout's divergence and the explanation of the question.
+struct RolloutExplanation {
+  Divergence divergence;
+  Explanation explanation;
+};
+
 /// A checkpoint loaded once (weights, config) by ModelServices::load; what it holds is the
 /// implementation's. Jobs share it; implementations serialise calls on one model if needed.
 class LoadedCheckpoint {
@@ -60,6 +79,10 @@ class ModelServices {
   /// One forward pass of `model` as capture_checkpoint_trace. Throws JobCancelled or Error.
   virtual ModelTrace trace(LoadedCheckpoint& model, const TraceRequest& request,
                            JobControl& control) = 0;
+  /// find_divergence with the model's config, then the explanation of the resolved question
+  /// (RolloutExplainer). Throws JobCancelled or Error (ValueError for a bad question).
+  virtual RolloutExplanation explain(LoadedCheckpoint& model, const ExplainJobRequest& request,
+                                     JobControl& control) = 0;
 };
 
 /// One loaded model per checkpoint, shared by every job that runs it (thread-safe). A model is

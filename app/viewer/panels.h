@@ -32,12 +32,15 @@ struct PanelFields {
   int edit_object = -1;            ///< Object index the edit fields were filled from.
   uint64_t edit_generation = 0;    ///< Generation the edit fields belong to.
   uint64_t synced_generation = 0;  ///< Generation the text fields were last filled from.
+  int explain_target = 0;          ///< ExplainTarget chosen in the Explain panel.
 };
 
 void draw_files_panel(const ViewerState& state, PanelFields& fields, Actions& out);
 void draw_display_panel(const ViewerState& state, Actions& out);
 void draw_rollout_panel(const ViewerState& state, Actions& out);
 void draw_model_panel(const ViewerState& state, PanelFields& fields, Actions& out);
+/// Divergence, explanation and attribution colours of the shown rollout (needs a checkpoint).
+void draw_explain_panel(const ViewerState& state, PanelFields& fields, Actions& out);
 /// Object table, plus the what-if editor when a checkpoint is in use.
 void draw_objects_panel(const ViewerState& state, PanelFields& fields, Actions& out);
 void draw_contacts_panel(const ViewerState& state, Actions& out);

@@ -230,6 +230,9 @@ void ViewerApp::draw_panels(Actions& actions) {
       if (state_.has_services() && section("Model", Panel::kModel, !state_.checkpoint().empty())) {
         draw_model_panel(state_, fields_, actions);
       }
+      if (rollout && state_.has_services() && section("Explain", Panel::kExplain, false)) {
+        draw_explain_panel(state_, fields_, actions);
+      }
       if (doc) {
         if (section("Objects", Panel::kObjects, true)) {
           draw_objects_panel(state_, fields_, actions);

@@ -47,6 +47,9 @@ void ViewerState::replaced() {
   cancel_jobs();
   drawn_pick_ = Selection{};
   selection_marker_.reset();
+  explanation_.reset();
+  attribution_ = render::PointAttribution{};
+  attribution_series_.reset();
 }
 
 void ViewerState::cancel_jobs() {
@@ -59,6 +62,10 @@ void ViewerState::cancel_jobs() {
   if (trace_job_) {
     trace_job_->cancel();
     retired_traces_.push_back(std::move(trace_job_));
+  }
+  if (explain_job_) {
+    explain_job_->cancel();
+    retired_explains_.push_back(std::move(explain_job_));
   }
   rollout_input_ = RolloutJobInput{};
 }
@@ -76,6 +83,7 @@ void ViewerState::reap_retired() {
   };
   reap(retired_rollouts_);
   reap(retired_traces_);
+  reap(retired_explains_);
 }
 
 const SceneDocument& ViewerState::document() const {
@@ -447,6 +455,7 @@ void ViewerState::update_jobs() {
       }
     }
   }
+  update_explain_job();
   if (trace_from_file_ && trace_ && trace_level_ != view_.level &&
       view_.level < static_cast<int>(trace_->levels.size())) {
     install_trace(trace_, view_.level, -1);

@@ -22,7 +22,17 @@
 namespace dynscope::app::viewer {
 
 /// Collapsible sections of the side panel.
-enum class Panel { kFiles, kDisplay, kRollout, kModel, kObjects, kContacts, kLevels, kInspector };
+enum class Panel {
+  kFiles,
+  kDisplay,
+  kRollout,
+  kModel,
+  kExplain,
+  kObjects,
+  kContacts,
+  kLevels,
+  kInspector
+};
 
 /// Which drawn point set a click selects from.
 enum class PickSet { kNone, kLevel, kPrediction, kTruth, kCompared };
@@ -157,8 +167,11 @@ class ViewerState {
   void start_what_if(const ObjectEdit& edit);
   /// Cancels every running job (their results will be dropped).
   void cancel_jobs();
-  /// True while a rollout or trace runs in the background (cancelled ones not counted).
-  bool busy() const { return rollout_job_ != nullptr || trace_job_ != nullptr; }
+  /// True while a rollout, trace or explanation runs in the background (cancelled ones not
+  /// counted).
+  bool busy() const {
+    return rollout_job_ != nullptr || trace_job_ != nullptr || explain_job_ != nullptr;
+  }
   /// The running rollout job or null (label, progress).
   const BackgroundJob<std::vector<Rollout>>* rollout_job() const { return rollout_job_.get(); }
   /// Frame the running trace job captures, or -1.
@@ -166,12 +179,37 @@ class ViewerState {
   /// Finished jobs whose result was dropped because their ticket was stale or they were cancelled.
   int dropped_results() const { return dropped_; }
   /// Cancelled jobs whose thread has not finished yet.
-  size_t retiring_jobs() const { return retired_rollouts_.size() + retired_traces_.size(); }
+  size_t retiring_jobs() const {
+    return retired_rollouts_.size() + retired_traces_.size() + retired_explains_.size();
+  }
   /// The models loaded for jobs, or null without services.
   const ModelCache* model_cache() const { return cache_.get(); }
   /// Installs finished jobs of the current generation, drops stale ones and starts the trace the
   /// view needs. Throws the error of a failed job (once).
   void update_jobs();
+
+  // Explain.
+  /// Explains the shown rollout with the checkpoint in the background: its divergence and the
+  /// attribution of pass `frame` (−1: the divergence) for `object` or `point` (both −1: the
+  /// diverging object). When it finishes, the timeline moves to that pass and the attribution
+  /// colours come on. Throws ValueError without a rollout or checkpoint, or while one runs.
+  void start_explain(int frame, int32_t object, int point, ExplainTarget target);
+  /// The last finished explanation of the shown rollout (dropped with it), or null.
+  const RolloutExplanation* explanation() const { return explanation_.get(); }
+  /// The running explanation job or null.
+  const BackgroundJob<RolloutExplanation>* explain_job() const { return explain_job_.get(); }
+  /// Colours the shown rollout's predicted points by the explanation's shares (when there is one).
+  void set_attribution_colors(bool on) { attribution_colors_ = on; }
+  bool attribution_colors() const { return attribution_colors_; }
+  /// The predicted points coloured by the explanation (render::make_attribution_series) while
+  /// attribution colours are on and an explanation is held; else null.
+  std::shared_ptr<render::PointSeries> attribution_series() const;
+  /// The explanation's shares and explained points as the renderer draws them.
+  const render::PointAttribution& attribution() const { return attribution_; }
+  /// Moves to pass `frame` and selects the predicted point of object `a` nearest object `b`
+  /// there, with the inspector open (a contact pair of the divergence). Throws ValueError
+  /// without a rollout or when an object has no points.
+  void inspect_pair(int frame, int32_t a, int32_t b);
 
   // View.
   /// The level data panels and picking read: built from the shown trace, else the scene's
@@ -236,8 +274,8 @@ class ViewerState {
   const Timeline& timeline() const { return timeline_; }
   /// Advances playback by `dt_s` seconds of display time.
   void advance_playback(float dt_s);
-  /// Opens `panel`'s section on the next frame.
-  void show_panel(Panel panel) { open_requests_[panel] = true; }
+  /// Opens (or, with open false, closes) `panel`'s section on the next frame.
+  void show_panel(Panel panel, bool open = true) { open_requests_[panel] = open; }
   /// Takes the sections asked open since the last call.
   std::map<Panel, bool> take_open_requests() { return std::move(open_requests_); }
 
@@ -250,6 +288,8 @@ class ViewerState {
   void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
                          std::optional<Scene> what_if_scene);
   void reap_retired();
+  /// Installs a finished explanation of the current generation (viewer_state_explain.cpp).
+  void update_explain_job();
   JobTicket ticket() const { return {generation_, checkpoint_}; }
 
   ModelServices* services_;
@@ -288,6 +328,12 @@ class ViewerState {
   std::unique_ptr<BackgroundJob<ModelTrace>> trace_job_;
   std::vector<std::unique_ptr<BackgroundJob<std::vector<Rollout>>>> retired_rollouts_;
   std::vector<std::unique_ptr<BackgroundJob<ModelTrace>>> retired_traces_;
+  std::unique_ptr<BackgroundJob<RolloutExplanation>> explain_job_;
+  std::vector<std::unique_ptr<BackgroundJob<RolloutExplanation>>> retired_explains_;
+  std::unique_ptr<const RolloutExplanation> explanation_;
+  render::PointAttribution attribution_;
+  std::shared_ptr<render::PointSeries> attribution_series_;
+  bool attribution_colors_ = true;
   int dropped_ = 0;
   Selection drawn_pick_;  ///< A selected rollout point (level points live in view_.picked_point).
   std::shared_ptr<render::PointSeries> selection_marker_;  ///< See selection_marker().

@@ -20,6 +20,8 @@ PickSet rollout_layer_set(const ViewerState& state, const render::PointLayer& la
   const RolloutDocument* a = state.rollout_document();
   const RolloutDocument* b = state.compared_rollout();
   if (a && layer.series == a->series.prediction) return PickSet::kPrediction;
+  // The explanation's colouring of the same predicted points.
+  if (a && layer.series && layer.series == state.attribution_series()) return PickSet::kPrediction;
   if (a && layer.series == a->series.truth) return PickSet::kTruth;
   if (b && layer.series == b->series.prediction) return PickSet::kCompared;
   if (b && layer.series == b->series.truth) return PickSet::kTruth;  // the same scene's truth
@@ -155,6 +157,11 @@ std::vector<Viewport> build_viewports(const ViewerState& state) {
   auto port = [&](const RolloutDocument& doc, const render::ViewSpec& v, const render::Camera& c,
                   render::Rect rect, std::string caption) {
     out.push_back({render::rollout_frame(doc, f, v), c, rect, std::move(caption), {}});
+    const std::shared_ptr<render::PointSeries> attribution = state.attribution_series();
+    if (&doc == a && attribution && v.layers.prediction) {
+      render::add_attribution_layers(out.back().scene, attribution, state.attribution(), f,
+                                     doc.point_radius);
+    }
   };
   switch (state.rollout_mode()) {
     case RolloutMode::kPrediction:

@@ -92,9 +92,10 @@ std::vector<ContactPair> model_contacts(const Rollout& rollout, int frame,
 
 Divergence find_divergence(const Rollout& rollout, const ModelConfig& config,
                            const DivergenceOptions& options) {
-  const ObjectErrorCurves curves = object_error_curves(rollout);
-  const PassRange passes = rollout_passes(rollout);
   Divergence d;
+  d.curves = object_error_curves(rollout);
+  const ObjectErrorCurves& curves = d.curves;
+  const PassRange passes = rollout_passes(rollout);
   double largest = 0.0;
   for (const std::vector<double>& e : curves.errors) {
     for (int t = passes.first; t <= passes.last; ++t) {

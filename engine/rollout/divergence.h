@@ -82,6 +82,7 @@ struct Divergence {
   double growth = 0.0;         ///< Its growth at frame.
   std::vector<ObjectDivergence> objects;  ///< Every object, by first divergence (never: last).
   std::vector<ContactPair> contacts;      ///< model_contacts at `frame` (empty without one).
+  ObjectErrorCurves curves;               ///< The per-object error curves it read.
 
   bool found() const { return frame >= 0; }
 };

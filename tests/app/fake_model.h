@@ -16,6 +16,7 @@
 #include "engine/geometry/neighbors.h"
 #include "engine/geometry/point_cloud.h"
 #include "engine/model/model_config.h"
+#include "engine/rollout/explain_report.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/rollout_runner.h"
 
@@ -111,6 +112,64 @@ class FakeModel : public ModelServices {
     t.features.push_back(f);
     return t;
   }
+  // The divergence as the engine finds it (torch-free) and a hand-made attribution of the
+  // resolved question: 60 % to its own object's kNN, 40 % to the first other object's relational
+  // edges, spread evenly over each object's points.
+  RolloutExplanation explain(LoadedCheckpoint& model, const ExplainJobRequest& request,
+                             JobControl& control) override {
+    EXPECT_EQ(static_cast<Loaded&>(model).path, request.checkpoint);
+    wait_while_held(control, explains_started_);
+    ++explains_;
+    const Rollout& r = *request.rollout;
+    RolloutExplanation out;
+    out.divergence = find_divergence(r, ModelConfig::preset("physion"));
+    const ExplainSelection s = resolve_selection(r, out.divergence, request.frame, request.object,
+                                                 request.point, request.target, "frame");
+    Explanation& e = out.explanation;
+    e.frame = s.frame;
+    e.target = s.target;
+    e.point = s.point;
+    for (int i = 0; i < r.num_points(); ++i) {
+      const int32_t id = r.object_ids[static_cast<size_t>(i)];
+      if (s.point >= 0 ? i == s.point : id == s.object) e.points.push_back(i);
+    }
+    if (e.points.empty()) throw ValueError("object", "no points");
+    e.object = r.object_ids[static_cast<size_t>(e.points.front())];
+    e.error = mean_error_of(r, e.points, e.frame + 1);
+    e.error_growth = e.error - mean_error_of(r, e.points, e.frame);
+    e.value = e.error;
+    int32_t other = e.object;
+    for (int32_t id : r.object_ids) {
+      if (id != e.object) {
+        other = id;
+        break;
+      }
+    }
+    e.point_shares.assign(static_cast<size_t>(r.num_points()), 0.0);
+    auto add = [&](const char* list, int32_t object, double share) {
+      Contributor c;
+      c.list = list;
+      c.object = object;
+      c.share = share;
+      c.magnitude = share;
+      c.effect = share;
+      std::vector<int> points;
+      for (int i = 0; i < r.num_points(); ++i) {
+        if (r.object_ids[static_cast<size_t>(i)] == object) points.push_back(i);
+      }
+      c.edges = static_cast<int>(points.size());
+      for (int i : points) {
+        c.points.push_back(i);
+        c.point_shares.push_back(share / static_cast<double>(points.size()));
+        e.point_shares[static_cast<size_t>(i)] += c.point_shares.back();
+      }
+      e.contributors.push_back(c);
+    };
+    add("same", e.object, other == e.object ? 1.0 : 0.6);
+    if (other != e.object) add("relational", other, 0.4);
+    e.edge_total = 1.0;
+    return out;
+  }
   void hold() {
     std::lock_guard<std::mutex> lock(mutex_);
     hold_ = true;
@@ -122,6 +181,8 @@ class FakeModel : public ModelServices {
   }
   void wait_started(int n) { wait_for(rollouts_started_, n); }
   void wait_traces_started(int n) { wait_for(traces_started_, n); }
+  void wait_explains_started(int n) { wait_for(explains_started_, n); }
+  std::atomic<int> explains_{0};
   int cancelled_calls() const { return cancelled_; }
   int loads() const { return loads_; }
   static constexpr int kK = 6;
@@ -149,6 +210,7 @@ class FakeModel : public ModelServices {
   bool hold_ = false;
   int rollouts_started_ = 0;
   int traces_started_ = 0;
+  int explains_started_ = 0;
   std::atomic<int> cancelled_{0};
   std::atomic<int> loads_{0};
 };

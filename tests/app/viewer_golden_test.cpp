@@ -2,6 +2,7 @@
 // small per-pixel tolerance; DYNSCOPE_UPDATE_GOLDEN=1 (tests/app/update_goldens.sh) rewrites them.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 
@@ -9,6 +10,7 @@
 #include "engine/io/scene_file.h"
 #include "engine/rollout/model_points.h"
 #include "engine/rollout/rollout_runner.h"
+#include "fake_model.h"
 #include "render/image.h"
 #include "render/png_io.h"
 #include "viewer_test_util.h"
@@ -90,6 +92,26 @@ TEST(ViewerGolden, RolloutSideBySide) {
   v.app.state().set_frame(40);
   v.app.state().show_panel(Panel::kContacts);
   expect_matches_golden(settle(v), "viewer_rollout");
+}
+
+TEST(ViewerGolden, ExplainPanel) {
+  // The fake model's explanation of the constant-velocity collide rollout's divergence.
+  testing::FakeModel model;
+  testing::HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  state.open_scene(testing::collide_scene());
+  const Scene scene = state.document().scene;
+  state.set_rollout(testing::cv_rollout(scene, testing::collide_scene()), "rollout", &scene);
+  state.set_checkpoint("fake.pt");
+  state.start_explain(-1, -1, -1, ExplainTarget::kError);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while ((state.busy() || !state.explanation()) && std::chrono::steady_clock::now() < end) {
+    v.app.frame();
+  }
+  ASSERT_NE(state.explanation(), nullptr) << v.app.last_error();
+  state.show_panel(Panel::kRollout, false);
+  state.show_panel(Panel::kModel, false);
+  expect_matches_golden(settle(v), "viewer_explain");
 }
 
 }  // namespace

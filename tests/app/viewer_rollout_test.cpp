@@ -548,6 +548,140 @@ TEST(ViewerPick, ObservedFrameUsesTheFirstTraceableFrame) {
   EXPECT_EQ(state.level_frame(), 0);
 }
 
+// A viewer showing the constant-velocity collide rollout with the fake checkpoint attached.
+void show_rollout_with_checkpoint(HeadlessViewer& v) {
+  ViewerState& state = v.app.state();
+  state.open_scene(testing::collide_scene());
+  const Scene scene = state.document().scene;
+  state.set_rollout(collide_rollout(), "r", &scene);
+  state.set_checkpoint("fake.pt");
+  settle_jobs(v);
+}
+
+bool has_layer(const ViewerApp& app, const std::string& name) {
+  for (const std::vector<std::string>& port : layer_names(app)) {
+    if (std::find(port.begin(), port.end(), name) != port.end()) return true;
+  }
+  return false;
+}
+
+TEST(ViewerExplain, TheDivergenceIsExplainedInTheBackgroundAndColoursThePrediction) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  EXPECT_THROW(state.start_explain(-1, -1, -1, ExplainTarget::kError), ValueError) << "no rollout";
+  state.open_scene(testing::collide_scene());
+  const Scene scene = state.document().scene;
+  state.set_rollout(collide_rollout(), "r", &scene);
+  EXPECT_THROW(state.start_explain(-1, -1, -1, ExplainTarget::kError), ValueError)
+      << "no checkpoint";
+  state.set_checkpoint("fake.pt");
+  settle_jobs(v);
+  state.start_explain(-1, -1, -1, ExplainTarget::kError);
+  EXPECT_TRUE(state.busy());
+  settle_jobs(v);
+  ASSERT_NE(state.explanation(), nullptr) << v.app.last_error();
+  const RolloutExplanation& x = *state.explanation();
+  ASSERT_TRUE(x.divergence.found());
+  EXPECT_EQ(x.explanation.frame, x.divergence.frame);
+  EXPECT_EQ(x.explanation.object, x.divergence.object);
+  EXPECT_EQ(state.current_frame(), x.divergence.frame) << "the timeline moves to the pass";
+  EXPECT_EQ(x.divergence.curves.objects.size(), scene.objects.size());
+  // The prediction is drawn in the attribution's colours, still pickable as the prediction.
+  EXPECT_TRUE(has_layer(v.app, "attribution"));
+  EXPECT_TRUE(has_layer(v.app, "explained"));
+  EXPECT_FALSE(has_layer(v.app, "prediction"));
+  bool pickable = false;
+  for (const Viewport& p : v.app.viewports()) {
+    for (size_t i = 0; i < p.scene.points.size(); ++i) {
+      pickable = pickable || (p.scene.points[i].name == "attribution" &&
+                              p.layer_sets[i] == PickSet::kPrediction);
+    }
+  }
+  EXPECT_TRUE(pickable);
+  const render::PointAttribution& a = state.attribution();
+  ASSERT_EQ(a.shares.size(), static_cast<size_t>(collide_rollout().num_points()));
+  EXPECT_EQ(a.explained, x.explanation.points);
+  state.set_attribution_colors(false);
+  v.app.frame();
+  EXPECT_TRUE(has_layer(v.app, "prediction"));
+  EXPECT_FALSE(has_layer(v.app, "attribution"));
+  // A chosen point at the current pass.
+  state.select(PickSet::kPrediction, 5);
+  state.start_explain(state.current_frame(), -1, 5, ExplainTarget::kAcceleration);
+  settle_jobs(v);
+  ASSERT_NE(state.explanation(), nullptr);
+  EXPECT_EQ(state.explanation()->explanation.point, 5);
+  EXPECT_EQ(state.explanation()->explanation.target, ExplainTarget::kAcceleration);
+  EXPECT_TRUE(state.attribution_colors());
+  EXPECT_EQ(v.app.error_count(), 0) << v.app.last_error();
+}
+
+TEST(ViewerExplain, AnExplanationStartedForAnotherDocumentIsDropped) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  show_rollout_with_checkpoint(v);
+  const Scene scene = state.document().scene;
+  for (int kind = 0; kind < 3; ++kind) {
+    model.hold();
+    const int started = model.explains_.load();
+    state.start_explain(-1, -1, -1, ExplainTarget::kError);
+    EXPECT_THROW(state.start_explain(-1, -1, -1, ExplainTarget::kError), ValueError)
+        << "one explanation at a time";
+    v.app.frame();
+    if (kind == 0) state.set_rollout(collide_rollout(), "another rollout", &scene);
+    if (kind == 1) state.set_checkpoint("other.pt");
+    if (kind == 2) state.open_scene(testing::collide_scene());
+    model.release();
+    settle_jobs(v);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (state.retiring_jobs() > 0 && std::chrono::steady_clock::now() < end) v.app.frame();
+    EXPECT_EQ(state.explanation(), nullptr) << "kind " << kind;
+    EXPECT_EQ(state.attribution_series(), nullptr);
+    EXPECT_GE(model.explains_.load() + model.cancelled_calls(), started);
+    EXPECT_EQ(v.app.error_count(), 0) << v.app.last_error();
+    if (kind == 1) state.set_checkpoint("fake.pt");
+    if (kind == 2) {
+      state.set_rollout(collide_rollout(), "r", &scene);
+      state.set_checkpoint("fake.pt");
+    }
+    settle_jobs(v);
+  }
+  EXPECT_GE(state.dropped_results(), 3);
+}
+
+TEST(ViewerExplain, AContactPairOpensTheInspectorOnItsNearestPoint) {
+  FakeModel model;
+  HeadlessViewer v(&model);
+  ViewerState& state = v.app.state();
+  show_rollout_with_checkpoint(v);
+  const Rollout& r = collide_rollout();
+  const int32_t a = r.object_ids.front(), b = r.object_ids.back();
+  ASSERT_NE(a, b);
+  const int frame = 20;
+  state.inspect_pair(frame, a, b);
+  EXPECT_EQ(state.current_frame(), frame);
+  const Selection pick = state.selection();
+  ASSERT_EQ(pick.set, PickSet::kPrediction);
+  EXPECT_EQ(r.object_ids[static_cast<size_t>(pick.point)], a);
+  // No point of a is nearer to b than the chosen one.
+  const Points& p = r.predicted[frame];
+  auto gap = [&](int i) {
+    double best = 1e300;
+    for (Eigen::Index j = 0; j < p.rows(); ++j) {
+      if (r.object_ids[static_cast<size_t>(j)] == b)
+        best = std::min(best, (p.row(i) - p.row(j)).norm());
+    }
+    return best;
+  };
+  for (int i = 0; i < p.rows(); ++i) {
+    if (r.object_ids[static_cast<size_t>(i)] == a) EXPECT_GE(gap(i), gap(pick.point) - 1e-12);
+  }
+  EXPECT_THROW(state.inspect_pair(frame, a, 999), ValueError);
+  EXPECT_THROW(state.inspect_pair(1000, a, b), ValueError);
+}
+
 TEST(InitialStateEdit, StateReadsBackAndHistoryMovesRigidly) {
   const Scene& scene = collide();
   const int t = 2, object = 2;
