@@ -118,7 +118,7 @@ void prepare_explanation(render::BatchRenderOptions& options, const std::string&
                 explained_subject(e, run.names).c_str(), e.frame, e.frame + 1, e.error,
                 e.error_growth);
   std::vector<std::string>& legend = options.attribution_legend;
-  legend = {line, "colour: share of |grad x input| of its edges (grey: none); halo: explained"};
+  legend = {line, "colour: share of |grad x input| (grey: < 1 % of the largest); halo: explained"};
   const std::vector<std::string> lines = contributor_lines(e, run.names, 5);
   legend.insert(legend.end(), lines.begin(), lines.end());
   for (const std::string& l : legend) std::printf("%s\n", l.c_str());
