@@ -198,8 +198,9 @@ class ViewerState {
   const RolloutExplanation* explanation() const { return explanation_.get(); }
   /// The running explanation job or null.
   const BackgroundJob<RolloutExplanation>* explain_job() const { return explain_job_.get(); }
-  /// Colours the shown rollout's predicted points by the explanation's shares (when there is one).
-  void set_attribution_colors(bool on) { attribution_colors_ = on; }
+  /// Colours the shown rollout's predicted points by the explanation's shares (when there is
+  /// one); turning it on hides the level points, which would cover the predicted ones.
+  void set_attribution_colors(bool on);
   bool attribution_colors() const { return attribution_colors_; }
   /// The predicted points coloured by the explanation (render::make_attribution_series) while
   /// attribution colours are on and an explanation is held; else null.

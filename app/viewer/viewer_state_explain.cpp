@@ -48,9 +48,14 @@ void ViewerState::update_explain_job() {
   attribution_ = std::move(a);
   attribution_series_ = std::move(series);
   explanation_ = std::move(result);
-  attribution_colors_ = true;
+  set_attribution_colors(true);
   set_frame(explanation_->explanation.frame);
   show_panel(Panel::kExplain);
+}
+
+void ViewerState::set_attribution_colors(bool on) {
+  attribution_colors_ = on;
+  if (on) view_.layers.level_points = false;
 }
 
 std::shared_ptr<render::PointSeries> ViewerState::attribution_series() const {

@@ -590,6 +590,7 @@ TEST(ViewerExplain, TheDivergenceIsExplainedInTheBackgroundAndColoursThePredicti
   // The prediction is drawn in the attribution's colours, still pickable as the prediction.
   EXPECT_TRUE(has_layer(v.app, "attribution"));
   EXPECT_TRUE(has_layer(v.app, "explained"));
+  EXPECT_FALSE(state.layers().level_points) << "the level points would cover the colours";
   EXPECT_FALSE(has_layer(v.app, "prediction"));
   bool pickable = false;
   for (const Viewport& p : v.app.viewports()) {
