@@ -7,7 +7,10 @@ namespace dynscope {
 /// quantities prepared once per list (the default). kUnfused: the plain LibTorch formulation
 /// (gather, concatenate, batched matmul, relative positions per convolution), kept as the
 /// reference that tests and benchmarks compare the fused path against.
-enum class ConvImplementation { kFused, kUnfused };
+/// kFusedBaseline: the fused ops with their kernels compiled for the baseline x86-64 instruction
+/// set only (SSE2), which kFused replaces on CPUs with AVX2+FMA or AVX-512 (kernels cloned per
+/// instruction set and chosen at load time); kept so tests and benchmarks can compare the two.
+enum class ConvImplementation { kFused, kUnfused, kFusedBaseline };
 
 /// The formulation every PointConv and GnnConv of this process runs (process-wide).
 ConvImplementation conv_implementation();

@@ -22,6 +22,20 @@ using torch::autograd::tensor_list;
 // Query rows per parallel task: large enough that scheduling costs nothing next to the work.
 constexpr int64_t kGrain = 64;
 
+// Every kernel body below is force-inlined into two entry points: one compiled for the baseline
+// instruction set (ConvImplementation::kFusedBaseline) and one cloned for AVX-512, AVX2+FMA and the
+// baseline, the clone chosen once at load time from the CPU (GCC function multiversioning). The
+// inner loops run over the filter width J, which `omp simd` vectorises to J lanes.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define DYNSCOPE_SIMD_CLONES \
+  __attribute__((target_clones("arch=skylake-avx512", "arch=haswell", "default")))
+#else
+#define DYNSCOPE_SIMD_CLONES
+#endif
+#define DYNSCOPE_KERNEL_BODY __attribute__((always_inline)) inline
+
+bool use_simd_clones() { return conv_implementation() != ConvImplementation::kFusedBaseline; }
+
 std::string shape(const torch::Tensor& t) {
   if (!t.defined()) return "undefined";
   std::string s = "[";
@@ -68,51 +82,158 @@ struct Width {
 // acc[c·J + j] += x[c] · h[j] for c < n: the outer product of one neighbour, transposed so the
 // contiguous inner loop runs over J.
 template <typename T, int kJ>
-inline void add_outer(T* __restrict acc, const T* __restrict x, int64_t n, const T* __restrict h,
-                      Width<kJ> width) {
+DYNSCOPE_KERNEL_BODY void add_outer(T* __restrict acc, const T* __restrict x, int64_t n,
+                                    const T* __restrict h, Width<kJ> width) {
   const int64_t jn = width();
   for (int64_t c = 0; c < n; ++c) {
     const T xc = x[c];
-    T* row = acc + c * jn;
+    T* __restrict row = acc + c * jn;
+#pragma omp simd
     for (int64_t jj = 0; jj < jn; ++jj) row[jj] += xc * h[jj];
   }
 }
 
-// out[m, j·C' + c] = Σ_k h[m,k,j] x[m,k,c], x = [features[idx]; edge].
+// Arguments of the aggregation kernels (one struct, so each entry point takes one argument).
+template <typename T>
+struct AggregateArgs {
+  const T* features;
+  const T* edge;
+  const T* h;
+  const int64_t* index;
+  int64_t k, c, p;
+};
+
+// Rows [begin, end) of out[m, j·C' + c] = Σ_k h[m,k,j] x[m,k,c], x = [features[idx]; edge];
+// `acc` holds C'·J scratch values.
+template <typename T, int kJ>
+DYNSCOPE_KERNEL_BODY void aggregate_rows_body(const AggregateArgs<T>& a, T* out, int64_t begin,
+                                              int64_t end, Width<kJ> width, T* acc) {
+  const int64_t ct = a.c + a.p, j = width(), k = a.k;
+  for (int64_t q = begin; q < end; ++q) {
+    std::fill(acc, acc + ct * j, T(0));
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t e = q * k + n;
+      const int64_t src = a.index[e];
+      if (src < 0) continue;
+      const T* hk = a.h + e * j;
+      add_outer(acc, a.features + src * a.c, a.c, hk, width);
+      add_outer(acc + a.c * j, a.edge + e * a.p, a.p, hk, width);
+    }
+    T* o = out + q * j * ct;
+    for (int64_t jj = 0; jj < j; ++jj) {
+      for (int64_t cc = 0; cc < ct; ++cc) o[jj * ct + cc] = acc[cc * j + jj];
+    }
+  }
+}
+
+template <typename T, int kJ>
+void aggregate_rows_baseline(const AggregateArgs<T>& a, T* out, int64_t begin, int64_t end,
+                             Width<kJ> width, T* acc) {
+  aggregate_rows_body(a, out, begin, end, width, acc);
+}
+
+template <typename T, int kJ>
+DYNSCOPE_SIMD_CLONES void aggregate_rows_simd(const AggregateArgs<T>& a, T* out, int64_t begin,
+                                              int64_t end, Width<kJ> width, T* acc) {
+  aggregate_rows_body(a, out, begin, end, width, acc);
+}
+
 template <typename T, int kJ>
 void aggregate_forward(const T* features, const T* edge, const T* h, const int64_t* index, T* out,
                        int64_t m, int64_t k, int64_t c, int64_t p, Width<kJ> width) {
-  const int64_t ct = c + p, j = width();
+  const AggregateArgs<T> args{features, edge, h, index, k, c, p};
+  const bool simd = use_simd_clones();
   at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
-    std::vector<T> acc(static_cast<size_t>(ct * j));
-    for (int64_t q = begin; q < end; ++q) {
-      std::fill(acc.begin(), acc.end(), T(0));
-      for (int64_t n = 0; n < k; ++n) {
-        const int64_t e = q * k + n;
-        const int64_t src = index[e];
-        if (src < 0) continue;
-        const T* hk = h + e * j;
-        add_outer(acc.data(), features + src * c, c, hk, width);
-        add_outer(acc.data() + c * j, edge + e * p, p, hk, width);
-      }
-      T* o = out + q * j * ct;
-      for (int64_t jj = 0; jj < j; ++jj) {
-        for (int64_t cc = 0; cc < ct; ++cc) o[jj * ct + cc] = acc[static_cast<size_t>(cc * j + jj)];
-      }
+    std::vector<T> acc(static_cast<size_t>((c + p) * width()));
+    if (simd) {
+      aggregate_rows_simd(args, out, begin, end, width, acc.data());
+    } else {
+      aggregate_rows_baseline(args, out, begin, end, width, acc.data());
     }
   });
 }
 
 // dh[j] = Σ_c g[c·J + j] x[c] over the transposed gradient row g, for one neighbour.
 template <typename T, int kJ>
-inline void add_filter_grad(T* __restrict dh, const T* __restrict gt, const T* __restrict x,
-                            int64_t n, Width<kJ> width) {
+DYNSCOPE_KERNEL_BODY void add_filter_grad(T* __restrict dh, const T* __restrict gt,
+                                          const T* __restrict x, int64_t n, Width<kJ> width) {
   const int64_t jn = width();
   for (int64_t c = 0; c < n; ++c) {
     const T xc = x[c];
-    const T* row = gt + c * jn;
+    const T* __restrict row = gt + c * jn;
+#pragma omp simd
     for (int64_t jj = 0; jj < jn; ++jj) dh[jj] += xc * row[jj];
   }
+}
+
+// Gradient outputs of the aggregation for one range of query rows.
+template <typename T>
+struct AggregateGrads {
+  const T* grad;  ///< `[M, J·C']`.
+  T* d_feat;      ///< This worker's scatter buffer `[N,C]` or null.
+  T* d_edge;      ///< `[M,K,P]` or null.
+  T* d_h;         ///< `[M,K,J]` or null.
+};
+
+// Gradients of aggregate_forward for rows [begin, end); `gt` (C'·J) and `dx` (C') are scratch.
+template <typename T, int kJ>
+DYNSCOPE_KERNEL_BODY void aggregate_grad_rows_body(const AggregateArgs<T>& a,
+                                                   const AggregateGrads<T>& d, int64_t begin,
+                                                   int64_t end, Width<kJ> width, T* gt, T* dx) {
+  const int64_t c = a.c, p = a.p, k = a.k, ct = c + p, j = width();
+  for (int64_t q = begin; q < end; ++q) {
+    const T* g = d.grad + q * j * ct;
+    if (d.d_h) {
+      for (int64_t jj = 0; jj < j; ++jj) {
+        for (int64_t cc = 0; cc < ct; ++cc) gt[cc * j + jj] = g[jj * ct + cc];
+      }
+    }
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t e = q * k + n;
+      const int64_t src = a.index[e];
+      if (src < 0) {
+        if (d.d_h) std::fill(d.d_h + e * j, d.d_h + (e + 1) * j, T(0));
+        if (d.d_edge) std::fill(d.d_edge + e * p, d.d_edge + (e + 1) * p, T(0));
+        continue;
+      }
+      const T* hk = a.h + e * j;
+      if (d.d_h) {
+        T* dh = d.d_h + e * j;
+        std::fill(dh, dh + j, T(0));
+        add_filter_grad(dh, gt, a.features + src * c, c, width);
+        add_filter_grad(dh, gt + c * j, a.edge + e * p, p, width);
+      }
+      if (d.d_feat || d.d_edge) {
+        // dx[c] = Σ_j h[j] g[j·C' + c]: axpy over the contiguous C' per filter channel.
+        std::fill(dx, dx + ct, T(0));
+        for (int64_t jj = 0; jj < j; ++jj) {
+          const T hj = hk[jj];
+          const T* __restrict row = g + jj * ct;
+#pragma omp simd
+          for (int64_t cc = 0; cc < ct; ++cc) dx[cc] += hj * row[cc];
+        }
+        if (d.d_feat) {
+          T* __restrict dst = d.d_feat + src * c;
+#pragma omp simd
+          for (int64_t cc = 0; cc < c; ++cc) dst[cc] += dx[cc];
+        }
+        if (d.d_edge) std::copy(dx + c, dx + ct, d.d_edge + e * p);
+      }
+    }
+  }
+}
+
+template <typename T, int kJ>
+void aggregate_grad_rows_baseline(const AggregateArgs<T>& a, const AggregateGrads<T>& d,
+                                  int64_t begin, int64_t end, Width<kJ> width, T* gt, T* dx) {
+  aggregate_grad_rows_body(a, d, begin, end, width, gt, dx);
+}
+
+template <typename T, int kJ>
+DYNSCOPE_SIMD_CLONES void aggregate_grad_rows_simd(const AggregateArgs<T>& a,
+                                                   const AggregateGrads<T>& d, int64_t begin,
+                                                   int64_t end, Width<kJ> width, T* gt, T* dx) {
+  aggregate_grad_rows_body(a, d, begin, end, width, gt, dx);
 }
 
 // Gradients of aggregate_forward. d_features is scattered into one buffer per worker (`buffers`
@@ -122,48 +243,17 @@ void aggregate_backward(const T* features, const T* edge, const T* h, const int6
                         const T* grad, T* d_buffers, T* d_edge, T* d_h, int64_t n_src, int64_t m,
                         int64_t k, int64_t c, int64_t p, Width<kJ> width, const Partition& part) {
   const int64_t ct = c + p, j = width();
+  const AggregateArgs<T> args{features, edge, h, index, k, c, p};
+  const bool simd = use_simd_clones();
   at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
     std::vector<T> gt(static_cast<size_t>(ct * j)), dx(static_cast<size_t>(ct));
     for (int64_t w = first; w < last; ++w) {
-      T* d_feat = d_buffers ? d_buffers + w * n_src * c : nullptr;
-      for (int64_t q = part.begin(w); q < part.end(w); ++q) {
-        const T* g = grad + q * j * ct;
-        if (d_h) {
-          for (int64_t jj = 0; jj < j; ++jj) {
-            for (int64_t cc = 0; cc < ct; ++cc)
-              gt[static_cast<size_t>(cc * j + jj)] = g[jj * ct + cc];
-          }
-        }
-        for (int64_t n = 0; n < k; ++n) {
-          const int64_t e = q * k + n;
-          const int64_t src = index[e];
-          if (src < 0) {
-            if (d_h) std::fill(d_h + e * j, d_h + (e + 1) * j, T(0));
-            if (d_edge) std::fill(d_edge + e * p, d_edge + (e + 1) * p, T(0));
-            continue;
-          }
-          const T* hk = h + e * j;
-          if (d_h) {
-            T* dh = d_h + e * j;
-            std::fill(dh, dh + j, T(0));
-            add_filter_grad(dh, gt.data(), features + src * c, c, width);
-            add_filter_grad(dh, gt.data() + c * j, edge + e * p, p, width);
-          }
-          if (d_feat || d_edge) {
-            // dx[c] = Σ_j h[j] g[j·C' + c]: axpy over the contiguous C' per filter channel.
-            std::fill(dx.begin(), dx.end(), T(0));
-            for (int64_t jj = 0; jj < j; ++jj) {
-              const T a = hk[jj];
-              const T* row = g + jj * ct;
-              for (int64_t cc = 0; cc < ct; ++cc) dx[static_cast<size_t>(cc)] += a * row[cc];
-            }
-            if (d_feat) {
-              T* dst = d_feat + src * c;
-              for (int64_t cc = 0; cc < c; ++cc) dst[cc] += dx[static_cast<size_t>(cc)];
-            }
-            if (d_edge) std::copy(dx.data() + c, dx.data() + ct, d_edge + e * p);
-          }
-        }
+      const AggregateGrads<T> d{grad, d_buffers ? d_buffers + w * n_src * c : nullptr, d_edge, d_h};
+      if (simd) {
+        aggregate_grad_rows_simd(args, d, part.begin(w), part.end(w), width, gt.data(), dx.data());
+      } else {
+        aggregate_grad_rows_baseline(args, d, part.begin(w), part.end(w), width, gt.data(),
+                                     dx.data());
       }
     }
   });
@@ -226,29 +316,56 @@ struct AggregateFunction : torch::autograd::Function<AggregateFunction> {
   }
 };
 
-// out[m,k] = q[m] + s[idx] + r[m,k] (0 where idx < 0).
+// Rows [begin, end) of out[m,k] = q[m] + s[idx] + r[m,k] (0 where idx < 0).
+template <typename T>
+DYNSCOPE_KERNEL_BODY void gather_add_rows_body(const T* q, const T* s, const T* r,
+                                               const int64_t* index, T* out, int64_t begin,
+                                               int64_t end, int64_t k, int64_t hdim) {
+  for (int64_t row = begin; row < end; ++row) {
+    const T* __restrict qr = q + row * hdim;
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t e = row * k + n;
+      T* __restrict o = out + e * hdim;
+      const int64_t src = index[e];
+      if (src < 0) {
+        std::fill(o, o + hdim, T(0));
+        continue;
+      }
+      const T* __restrict sr = s + src * hdim;
+      if (r) {
+        const T* __restrict rr = r + e * hdim;
+#pragma omp simd
+        for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c] + rr[c];
+      } else {
+#pragma omp simd
+        for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c];
+      }
+    }
+  }
+}
+
+template <typename T>
+void gather_add_rows_baseline(const T* q, const T* s, const T* r, const int64_t* index, T* out,
+                              int64_t begin, int64_t end, int64_t k, int64_t hdim) {
+  gather_add_rows_body(q, s, r, index, out, begin, end, k, hdim);
+}
+
+template <typename T>
+DYNSCOPE_SIMD_CLONES void gather_add_rows_simd(const T* q, const T* s, const T* r,
+                                               const int64_t* index, T* out, int64_t begin,
+                                               int64_t end, int64_t k, int64_t hdim) {
+  gather_add_rows_body(q, s, r, index, out, begin, end, k, hdim);
+}
+
 template <typename T>
 void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index, T* out, int64_t m,
                         int64_t k, int64_t hdim) {
+  const bool simd = use_simd_clones();
   at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
-    for (int64_t row = begin; row < end; ++row) {
-      const T* qr = q + row * hdim;
-      for (int64_t n = 0; n < k; ++n) {
-        const int64_t e = row * k + n;
-        T* o = out + e * hdim;
-        const int64_t src = index[e];
-        if (src < 0) {
-          std::fill(o, o + hdim, T(0));
-          continue;
-        }
-        const T* sr = s + src * hdim;
-        if (r) {
-          const T* rr = r + e * hdim;
-          for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c] + rr[c];
-        } else {
-          for (int64_t c = 0; c < hdim; ++c) o[c] = qr[c] + sr[c];
-        }
-      }
+    if (simd) {
+      gather_add_rows_simd(q, s, r, index, out, begin, end, k, hdim);
+    } else {
+      gather_add_rows_baseline(q, s, r, index, out, begin, end, k, hdim);
     }
   });
 }

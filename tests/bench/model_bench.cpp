@@ -1,6 +1,7 @@
 // Model speed: one rollout step split into neighbour search (hierarchy), network and pose fitting,
-// for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the fused ops and
-// on the unfused reference formulation in the same run; training steps of the default movi-a
+// for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the fused ops
+// (kernels cloned per instruction set), on the same ops with their baseline SSE2 kernels and on
+// the unfused reference formulation in the same run; training steps of the default movi-a
 // recipe model on a bundled scene; peak memory of training on 10k points.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -17,10 +18,10 @@
 #include "engine/geometry/kabsch.h"
 #include "engine/io/scene_file.h"
 #include "engine/model/conv_implementation.h"
-#include "engine/model/torch_runtime.h"
 #include "engine/model/dynamics_model.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
+#include "engine/model/torch_runtime.h"
 #include "engine/train/train_options.h"
 
 namespace dynscope {
@@ -68,20 +69,25 @@ void apply_args(benchmark::internal::Benchmark* b) {
   b->ArgNames({"points", "kind"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
-// Arguments: {points, model kind, implementation (0 fused, 1 unfused reference)}.
+// Arguments: {points, model kind, implementation (use_implementation)}.
 void apply_impl_args(benchmark::internal::Benchmark* b) {
   for (int kind : {0, 1, 2}) {
     for (int n : {1000, 3000, 10000}) {
-      for (int impl : {0, 1}) b->Args({n, kind, impl});
+      for (int impl : {0, 2, 1}) b->Args({n, kind, impl});
     }
   }
-  b->ArgNames({"points", "kind", "unfused"})->Unit(benchmark::kMillisecond)->UseRealTime();
+  b->ArgNames({"points", "kind", "impl"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
 // Selects the formulation for one benchmark run and names it in the label.
+// impl 0: the fused ops (kernels cloned per instruction set), 1: the unfused reference,
+// 2: the fused ops on their baseline (SSE2) kernels.
 std::string use_implementation(int64_t arg, const ModelConfig& config) {
-  set_conv_implementation(arg ? ConvImplementation::kUnfused : ConvImplementation::kFused);
-  return to_string(config.kind) + (arg ? " unfused" : " fused");
+  const ConvImplementation impl = arg == 1   ? ConvImplementation::kUnfused
+                                  : arg == 2 ? ConvImplementation::kFusedBaseline
+                                             : ConvImplementation::kFused;
+  set_conv_implementation(impl);
+  return to_string(config.kind) + (arg == 1 ? " unfused" : arg == 2 ? " fused-baseline" : " fused");
 }
 
 void BM_NeighbourSearch(benchmark::State& state) {
@@ -181,7 +187,7 @@ TrainCase movi_train_case() {
   return c;
 }
 
-// One optimiser step: forward, Huber loss, backward, Adam. Argument {unfused, hierarchy}: with
+// One optimiser step: forward, Huber loss, backward, Adam. Arguments {impl, hierarchy}: with
 // hierarchy = 1 the step also builds the example's hierarchy (what training does when the
 // prefetch thread cannot hide it).
 void BM_TrainStep(benchmark::State& state) {
@@ -206,10 +212,12 @@ void BM_TrainStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrainStep)
     ->Args({0, 0})
+    ->Args({2, 0})
     ->Args({1, 0})
     ->Args({0, 1})
+    ->Args({2, 1})
     ->Args({1, 1})
-    ->ArgNames({"unfused", "hierarchy"})
+    ->ArgNames({"impl", "hierarchy"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
