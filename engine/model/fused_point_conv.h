@@ -18,6 +18,24 @@ namespace dynscope {
 torch::Tensor point_conv_aggregate(const torch::Tensor& features, const torch::Tensor& edge,
                                    const torch::Tensor& h, const torch::Tensor& index);
 
+/// The two small per-edge MLPs of a PointConv as plain weights: the WeightNet
+/// h = W3·relu(W2·relu(W1·r + b1) + b2) + b3 (r → J) and, when `e1` is defined, the positional
+/// embedding e = E2·relu(E1·r + c1) + c2 (r → P). Shapes as torch::nn::Linear stores them
+/// (`[out, in]` weights, `[out]` biases).
+struct EdgeMlps {
+  torch::Tensor w1, b1, w2, b2, w3, b3;
+  torch::Tensor e1, c1, e2, c2;
+};
+
+/// Inference form of point_conv_aggregate(features, e(r), h(r) · gate, index): the edge MLPs are
+/// evaluated per neighbour inside the aggregation, so no `[M,K,·]` intermediate is written.
+/// `rel` `[M,K,3]` float32 relative positions (already scaled), `gate` `[M,K]` or undefined.
+/// Float32, CPU, not differentiable (call it without gradients). Throws ValueError on shape,
+/// dtype or index mismatch.
+torch::Tensor point_conv_aggregate_inference(const torch::Tensor& features,
+                                             const torch::Tensor& rel, const EdgeMlps& mlps,
+                                             const torch::Tensor& gate, const torch::Tensor& index);
+
 /// Gathered edge inputs for message passing, as one op: out[m,k] = q[m] + s[index[m,k]] + r[m,k]
 /// for valid entries and 0 where index is −1. `q` `[M,H]`, `s` `[N,H]`, `r` `[M,K,H]` (undefined:
 /// none). Float32 or float64, CPU; differentiable in q, s and r. Throws ValueError on mismatch.

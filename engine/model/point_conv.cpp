@@ -1,6 +1,7 @@
 // Efficient PointConv forward pass.
 #include "engine/model/point_conv.h"
 
+#include <torch/autograd.h>
 #include <torch/nn/modules/activation.h>
 
 #include <string>
@@ -73,16 +74,49 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
     return forward_unfused(query, source, features, neighbors);
   }
   const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
+  torch::Tensor agg;
+  if (!torch::GradMode::is_enabled() && features.scalar_type() == torch::kFloat) {
+    // Without gradients the WeightNet and the embedding run per neighbour inside the
+    // aggregation: no [M,K,·] intermediate is written.
+    agg = point_conv_aggregate_inference(features, rel, edge_mlps(), neighbors.gate,
+                                         masked_index(neighbors));
+  } else {
+    agg = aggregate_with_autograd(features, rel, neighbors);
+  }
+  if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);
+  // Without neighbours there is nothing to convolve: the bias must not leak into the output.
+  return linear->forward(agg) * neighbors.has_neighbors();
+}
+
+EdgeMlps PointConvImpl::edge_mlps() const {
+  EdgeMlps m;
+  auto layer = [](const torch::nn::Sequential& seq, size_t i) {
+    return seq->ptr<torch::nn::LinearImpl>(i);
+  };
+  m.w1 = layer(weightnet, 0)->weight;
+  m.b1 = layer(weightnet, 0)->bias;
+  m.w2 = layer(weightnet, 2)->weight;
+  m.b2 = layer(weightnet, 2)->bias;
+  m.w3 = layer(weightnet, 4)->weight;
+  m.b3 = layer(weightnet, 4)->bias;
+  if (pos_embed) {
+    m.e1 = layer(pos_embed, 0)->weight;
+    m.c1 = layer(pos_embed, 0)->bias;
+    m.e2 = layer(pos_embed, 2)->weight;
+    m.c2 = layer(pos_embed, 2)->bias;
+  }
+  return m;
+}
+
+torch::Tensor PointConvImpl::aggregate_with_autograd(const torch::Tensor& features,
+                                                     const torch::Tensor& rel,
+                                                     const NeighborTensors& neighbors) {
   const torch::Tensor edge = pos_embed ? pos_embed->forward(rel) : torch::Tensor();
   // The fused op skips masked neighbours, so h needs no mask here.
   torch::Tensor h = weightnet->forward(rel);  // [M,K,c_mid]
   // The edge term h_k x_kᵀ is linear in h_k, so a gate scales the whole message of edge k.
   if (neighbors.gate.defined()) h = h * neighbors.gate.unsqueeze(-1);
-  torch::Tensor agg =
-      point_conv_aggregate(features, edge, h, masked_index(neighbors));  // [M,c_mid·C]
-  if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);
-  // Without neighbours there is nothing to convolve: the bias must not leak into the output.
-  return linear->forward(agg) * neighbors.has_neighbors();
+  return point_conv_aggregate(features, edge, h, masked_index(neighbors));  // [M,c_mid·C]
 }
 
 }  // namespace dynscope

@@ -6,6 +6,7 @@
 #include <torch/nn/modules/linear.h>
 #include <torch/nn/pimpl.h>
 
+#include "engine/model/fused_point_conv.h"
 #include "engine/model/neighbor_tensors.h"
 
 namespace dynscope {
@@ -48,6 +49,8 @@ class PointConvImpl : public torch::nn::Module {
                                const NeighborTensors& neighbors);
 
   const PointConvOptions& options() const { return options_; }
+  /// The WeightNet and positional-embedding weights as the fused inference op reads them.
+  EdgeMlps edge_mlps() const;
 
   torch::nn::Sequential weightnet{nullptr};
   torch::nn::Sequential pos_embed{nullptr};
@@ -57,6 +60,10 @@ class PointConvImpl : public torch::nn::Module {
   // The unfused reference formulation (ConvImplementation::kUnfused).
   torch::Tensor forward_unfused(const torch::Tensor& query, const torch::Tensor& source,
                                 const torch::Tensor& features, const NeighborTensors& neighbors);
+
+  // The fused aggregation with autograd: WeightNet and embedding as LibTorch ops, then the op.
+  torch::Tensor aggregate_with_autograd(const torch::Tensor& features, const torch::Tensor& rel,
+                                        const NeighborTensors& neighbors);
 
   PointConvOptions options_;
 };

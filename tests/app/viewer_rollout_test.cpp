@@ -677,7 +677,9 @@ TEST(ViewerExplain, AContactPairOpensTheInspectorOnItsNearestPoint) {
     return best;
   };
   for (int i = 0; i < p.rows(); ++i) {
-    if (r.object_ids[static_cast<size_t>(i)] == a) EXPECT_GE(gap(i), gap(pick.point) - 1e-12);
+    if (r.object_ids[static_cast<size_t>(i)] == a) {
+      EXPECT_GE(gap(i), gap(pick.point) - 1e-12);
+    }
   }
   EXPECT_THROW(state.inspect_pair(frame, a, 999), ValueError);
   EXPECT_THROW(state.inspect_pair(1000, a, b), ValueError);

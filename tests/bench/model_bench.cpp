@@ -112,6 +112,25 @@ void BM_Network(benchmark::State& state) {
 }
 BENCHMARK(BM_Network)->Apply(apply_impl_args);
 
+// The fused network's forward pass with gradients recorded (as training runs it): the
+// differentiable form, WeightNet and embedding as LibTorch ops before the aggregation, which is
+// what inference ran before the inference form evaluated them inside it.
+void BM_NetworkRecorded(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const PointState s = make_state(static_cast<int>(state.range(0)));
+  DynamicsModel model(config_for(static_cast<int>(state.range(1))));
+  state.SetLabel(to_string(model->config().kind) + " fused, gradients recorded");
+  model->eval();
+  const ModelInput input = make_model_input(s, model->build_hierarchy(s));
+  for (auto _ : state) benchmark::DoNotOptimize(model->predict_positions(input));
+}
+BENCHMARK(BM_NetworkRecorded)
+    ->Args({3000, 0})
+    ->Args({10000, 0})
+    ->ArgNames({"points", "kind"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void BM_PoseFitting(benchmark::State& state) {
   const PointState s = make_state(static_cast<int>(state.range(0)));
   std::vector<Points> per_object(kObjects);

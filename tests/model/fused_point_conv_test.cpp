@@ -280,6 +280,36 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
   }
 }
 
+// Without gradients the WeightNet and the embedding run inside the aggregation
+// (point_conv_aggregate_inference); with them, as LibTorch ops before the autograd op. Both
+// forms, with and without an edge gate, at the default filter width 16 and at 4.
+TEST(FusedPointConvTest, TheInferenceFormMatchesTheDifferentiableForm) {
+  for (int64_t c_mid : {16, 4}) {
+    for (bool gated : {false, true}) {
+      ConvCase cs = make_conv_case(60, 50, 7, 6, gated ? 21 : 22);
+      PointConv conv(
+          PointConvOptions(6, 9).c_mid(c_mid).pos_channels(8).normalize(gated).position_scale(0.3));
+      NeighborTensors nb = cs.nb;
+      nb.prepare(cs.query, cs.source);
+      if (gated) nb.gate = torch::rand({nb.rows(), nb.index.size(1)});
+      const torch::Tensor differentiable = conv->forward(cs.query, cs.source, cs.features, nb);
+      ASSERT_TRUE(differentiable.requires_grad());
+      torch::Tensor inference;
+      {
+        torch::NoGradGuard no_grad;
+        inference = conv->forward(cs.query, cs.source, cs.features, nb);
+      }
+      EXPECT_TRUE(torch::allclose(inference, differentiable.detach(), 1e-5, 1e-5))
+          << "c_mid " << c_mid << " gated " << gated << ": "
+          << (inference - differentiable.detach()).abs().max();
+    }
+  }
+  EdgeMlps none;
+  EXPECT_THROW(point_conv_aggregate_inference(torch::zeros({3, 2}), torch::zeros({2, 2, 3}), none,
+                                              {}, torch::zeros({2, 2}, torch::kInt64)),
+               ValueError);
+}
+
 TEST(FusedPointConvTest, GnnConvMatchesItsUnfusedFormulation) {
   for (bool normalize : {false, true}) {
     ConvCase cs = make_conv_case(35, 20, 5, 6, normalize ? 21 : 22);

@@ -251,7 +251,9 @@ TEST(Explain, APointWithoutRelationalNeighboursGetsNoRelationalShare) {
   EXPECT_EQ(share_of(far, "relational"), 0.0);
   for (const Contributor& c : far.contributors) EXPECT_EQ(c.object, 12) << c.list;
   for (size_t i = 0; i < far.point_shares.size(); ++i) {
-    if (scene.ids[i] != 12) EXPECT_EQ(far.point_shares[i], 0.0) << i;
+    if (scene.ids[i] != 12) {
+      EXPECT_EQ(far.point_shares[i], 0.0) << i;
+    }
   }
   // A point of a touching object does get a relational share (so the rule above can fail).
   s.point = 5;

@@ -193,7 +193,9 @@ TEST(DistributedTraining, OptionsFromTheTorchrunEnvironment) {
   for (const char* v : {"WORLD_SIZE", "RANK", "MASTER_ADDR", "MASTER_PORT"}) ::unsetenv(v);
   DistributedOptions nccl;
   nccl.backend = "nccl";
-  if (!nccl_available()) EXPECT_THROW(nccl.validate(), ValueError);
+  if (!nccl_available()) {
+    EXPECT_THROW(nccl.validate(), ValueError);
+  }
 }
 
 TEST(DistributedLauncher, AFailingRankStopsTheOthersAndIsNamed) {
