@@ -10,7 +10,9 @@ namespace dynscope {
 /// kFusedBaseline: the fused ops with their kernels compiled for the baseline x86-64 instruction
 /// set only (SSE2), which kFused replaces on CPUs with AVX2+FMA or AVX-512 (kernels cloned per
 /// instruction set and chosen at load time); kept so tests and benchmarks can compare the two.
-enum class ConvImplementation { kFused, kUnfused, kFusedBaseline };
+/// kFusedComposed: the fused aggregation with the PointConv's WeightNet and positional embedding
+/// as LibTorch ops before it (the formulation point_conv_aggregate_mlp replaced), kept likewise.
+enum class ConvImplementation { kFused, kUnfused, kFusedBaseline, kFusedComposed };
 
 /// The formulation every PointConv and GnnConv of this process runs (process-wide).
 ConvImplementation conv_implementation();

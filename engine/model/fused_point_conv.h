@@ -27,14 +27,15 @@ struct EdgeMlps {
   torch::Tensor e1, c1, e2, c2;
 };
 
-/// Inference form of point_conv_aggregate(features, e(r), h(r) · gate, index): the edge MLPs are
-/// evaluated per neighbour inside the aggregation, so no `[M,K,·]` intermediate is written.
-/// `rel` `[M,K,3]` float32 relative positions (already scaled), `gate` `[M,K]` or undefined.
-/// Float32, CPU, not differentiable (call it without gradients). Throws ValueError on shape,
-/// dtype or index mismatch.
-torch::Tensor point_conv_aggregate_inference(const torch::Tensor& features,
-                                             const torch::Tensor& rel, const EdgeMlps& mlps,
-                                             const torch::Tensor& gate, const torch::Tensor& index);
+/// point_conv_aggregate(features, e(r), h(r) · gate, index) with the edge MLPs evaluated per
+/// neighbour inside the aggregation, forward and backward, so no `[M,K,·]` intermediate is
+/// written or saved: the backward recomputes h and e per neighbour. `rel` `[M,K,3]` float32
+/// relative positions (already scaled; no gradient flows into them), `gate` `[M,K]` or undefined.
+/// Differentiable in features, gate and every MLP weight. Float32, CPU. Throws ValueError on
+/// shape, dtype or index mismatch.
+torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torch::Tensor& rel,
+                                       const EdgeMlps& mlps, const torch::Tensor& gate,
+                                       const torch::Tensor& index);
 
 /// Gathered edge inputs for message passing, as one op: out[m,k] = q[m] + s[index[m,k]] + r[m,k]
 /// for valid entries and 0 where index is −1. `q` `[M,H]`, `s` `[N,H]`, `r` `[M,K,H]` (undefined:

@@ -75,11 +75,12 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
   }
   const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
   torch::Tensor agg;
-  if (!torch::GradMode::is_enabled() && features.scalar_type() == torch::kFloat) {
-    // Without gradients the WeightNet and the embedding run per neighbour inside the
-    // aggregation: no [M,K,·] intermediate is written.
-    agg = point_conv_aggregate_inference(features, rel, edge_mlps(), neighbors.gate,
-                                         masked_index(neighbors));
+  if (features.scalar_type() == torch::kFloat && rel.scalar_type() == torch::kFloat &&
+      conv_implementation() != ConvImplementation::kFusedComposed) {
+    // The WeightNet and the embedding run per neighbour inside the aggregation (and again in its
+    // backward): no [M,K,·] intermediate is written or saved.
+    agg = point_conv_aggregate_mlp(features, rel, edge_mlps(), neighbors.gate,
+                                   masked_index(neighbors));
   } else {
     agg = aggregate_with_autograd(features, rel, neighbors);
   }

@@ -49,7 +49,7 @@ class PointConvImpl : public torch::nn::Module {
                                const NeighborTensors& neighbors);
 
   const PointConvOptions& options() const { return options_; }
-  /// The WeightNet and positional-embedding weights as the fused inference op reads them.
+  /// The WeightNet and positional-embedding weights as point_conv_aggregate_mlp reads them.
   EdgeMlps edge_mlps() const;
 
   torch::nn::Sequential weightnet{nullptr};
@@ -61,7 +61,8 @@ class PointConvImpl : public torch::nn::Module {
   torch::Tensor forward_unfused(const torch::Tensor& query, const torch::Tensor& source,
                                 const torch::Tensor& features, const NeighborTensors& neighbors);
 
-  // The fused aggregation with autograd: WeightNet and embedding as LibTorch ops, then the op.
+  // Float64 and ConvImplementation::kFusedComposed: WeightNet and embedding as LibTorch ops,
+  // then the aggregation op.
   torch::Tensor aggregate_with_autograd(const torch::Tensor& features, const torch::Tensor& rel,
                                         const NeighborTensors& neighbors);
 

@@ -1,6 +1,7 @@
 // Tests of the viewer with rollouts and a fake model: display modes, error strip, uploads,
 // trace-driven inspector, background rollouts (two checkpoints, what-if) and bad files.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <condition_variable>
@@ -30,8 +31,10 @@ using testing::cv_rollout;
 using testing::FakeModel;
 using testing::HeadlessViewer;
 
+// A directory of this process (ctest runs the tests of this binary in parallel processes).
 fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("dynscope_viewer_rollout_test_" + name);
+  const fs::path dir = fs::temp_directory_path() / ("dynscope_viewer_rollout_test_" + name + "_" +
+                                                    std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -73,7 +73,7 @@ void apply_args(benchmark::internal::Benchmark* b) {
 void apply_impl_args(benchmark::internal::Benchmark* b) {
   for (int kind : {0, 1, 2}) {
     for (int n : {1000, 3000, 10000}) {
-      for (int impl : {0, 2, 1}) b->Args({n, kind, impl});
+      for (int impl : {0, 3, 2, 1}) b->Args({n, kind, impl});
     }
   }
   b->ArgNames({"points", "kind", "impl"})->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -81,13 +81,18 @@ void apply_impl_args(benchmark::internal::Benchmark* b) {
 
 // Selects the formulation for one benchmark run and names it in the label.
 // impl 0: the fused ops (kernels cloned per instruction set), 1: the unfused reference,
-// 2: the fused ops on their baseline (SSE2) kernels.
+// 2: the fused ops on their baseline (SSE2) kernels, 3: the fused aggregation with the PointConv's
+// WeightNet and embedding as LibTorch ops before it (ConvImplementation::kFusedComposed).
 std::string use_implementation(int64_t arg, const ModelConfig& config) {
   const ConvImplementation impl = arg == 1   ? ConvImplementation::kUnfused
                                   : arg == 2 ? ConvImplementation::kFusedBaseline
+                                  : arg == 3 ? ConvImplementation::kFusedComposed
                                              : ConvImplementation::kFused;
   set_conv_implementation(impl);
-  return to_string(config.kind) + (arg == 1 ? " unfused" : arg == 2 ? " fused-baseline" : " fused");
+  return to_string(config.kind) + (arg == 1   ? " unfused"
+                                   : arg == 2 ? " fused-baseline"
+                                   : arg == 3 ? " fused-composed"
+                                              : " fused");
 }
 
 void BM_NeighbourSearch(benchmark::State& state) {
@@ -111,25 +116,6 @@ void BM_Network(benchmark::State& state) {
   set_conv_implementation(ConvImplementation::kFused);
 }
 BENCHMARK(BM_Network)->Apply(apply_impl_args);
-
-// The fused network's forward pass with gradients recorded (as training runs it): the
-// differentiable form, WeightNet and embedding as LibTorch ops before the aggregation, which is
-// what inference ran before the inference form evaluated them inside it.
-void BM_NetworkRecorded(benchmark::State& state) {
-  set_torch_threads(bench_threads());
-  const PointState s = make_state(static_cast<int>(state.range(0)));
-  DynamicsModel model(config_for(static_cast<int>(state.range(1))));
-  state.SetLabel(to_string(model->config().kind) + " fused, gradients recorded");
-  model->eval();
-  const ModelInput input = make_model_input(s, model->build_hierarchy(s));
-  for (auto _ : state) benchmark::DoNotOptimize(model->predict_positions(input));
-}
-BENCHMARK(BM_NetworkRecorded)
-    ->Args({3000, 0})
-    ->Args({10000, 0})
-    ->ArgNames({"points", "kind"})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
 
 void BM_PoseFitting(benchmark::State& state) {
   const PointState s = make_state(static_cast<int>(state.range(0)));
@@ -231,10 +217,11 @@ void BM_TrainStep(benchmark::State& state) {
 }
 BENCHMARK(BM_TrainStep)
     ->Args({0, 0})
+    ->Args({3, 0})
     ->Args({2, 0})
     ->Args({1, 0})
     ->Args({0, 1})
-    ->Args({2, 1})
+    ->Args({3, 1})
     ->Args({1, 1})
     ->ArgNames({"impl", "hierarchy"})
     ->Unit(benchmark::kMillisecond)

@@ -280,33 +280,51 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
   }
 }
 
-// Without gradients the WeightNet and the embedding run inside the aggregation
-// (point_conv_aggregate_inference); with them, as LibTorch ops before the autograd op. Both
-// forms, with and without an edge gate, at the default filter width 16 and at 4.
-TEST(FusedPointConvTest, TheInferenceFormMatchesTheDifferentiableForm) {
+// point_conv_aggregate_mlp (edge MLPs evaluated inside the aggregation, forward and backward)
+// against its composition from LibTorch ops and point_conv_aggregate: outputs and gradients in
+// features, gate and every MLP weight, at the default filter width 16 and at 4, with and without
+// a gate and a positional embedding.
+TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
   for (int64_t c_mid : {16, 4}) {
     for (bool gated : {false, true}) {
-      ConvCase cs = make_conv_case(60, 50, 7, 6, gated ? 21 : 22);
-      PointConv conv(
-          PointConvOptions(6, 9).c_mid(c_mid).pos_channels(8).normalize(gated).position_scale(0.3));
-      NeighborTensors nb = cs.nb;
-      nb.prepare(cs.query, cs.source);
-      if (gated) nb.gate = torch::rand({nb.rows(), nb.index.size(1)});
-      const torch::Tensor differentiable = conv->forward(cs.query, cs.source, cs.features, nb);
-      ASSERT_TRUE(differentiable.requires_grad());
-      torch::Tensor inference;
-      {
-        torch::NoGradGuard no_grad;
-        inference = conv->forward(cs.query, cs.source, cs.features, nb);
+      for (int64_t pos : {0, 8}) {
+        ConvCase cs = make_conv_case(60, 50, 7, 6, 20 + c_mid + gated + pos);
+        PointConv conv(PointConvOptions(6, 9).c_mid(c_mid).pos_channels(pos));
+        NeighborTensors nb = cs.nb;
+        nb.prepare(cs.query, cs.source);
+        const torch::Tensor rel = nb.rel * 3.0f;
+        const torch::Tensor index = masked_index(nb);
+        torch::Tensor gate;
+        if (gated) gate = torch::rand({nb.rows(), nb.index.size(1)}).requires_grad_(true);
+        const torch::Tensor fused =
+            point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
+        torch::Tensor h = conv->weightnet->forward(rel);
+        if (gated) h = h * gate.unsqueeze(-1);
+        const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
+        const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
+        ASSERT_EQ(fused.sizes(), ref.sizes());
+        EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
+        std::vector<torch::Tensor> wrt{cs.features};
+        if (gated) wrt.push_back(gate);
+        for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
+        if (pos) {
+          for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
+        }
+        const torch::Tensor w = torch::randn_like(ref);
+        const auto gf = grads_of(fused, w, wrt);
+        const auto gr = grads_of(ref, w, wrt);
+        ASSERT_EQ(gf.size(), gr.size());
+        for (size_t i = 0; i < gf.size(); ++i) {
+          EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-4, 1e-5))
+              << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " gradient " << i
+              << " differs by " << (gf[i] - gr[i]).abs().max();
+        }
       }
-      EXPECT_TRUE(torch::allclose(inference, differentiable.detach(), 1e-5, 1e-5))
-          << "c_mid " << c_mid << " gated " << gated << ": "
-          << (inference - differentiable.detach()).abs().max();
     }
   }
   EdgeMlps none;
-  EXPECT_THROW(point_conv_aggregate_inference(torch::zeros({3, 2}), torch::zeros({2, 2, 3}), none,
-                                              {}, torch::zeros({2, 2}, torch::kInt64)),
+  EXPECT_THROW(point_conv_aggregate_mlp(torch::zeros({3, 2}), torch::zeros({2, 2, 3}), none, {},
+                                        torch::zeros({2, 2}, torch::kInt64)),
                ValueError);
 }
 
