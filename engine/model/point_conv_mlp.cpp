@@ -129,6 +129,36 @@ struct MlpGradLayout {
   }
 };
 
+// Backward of y = Wᵀ-stored linear (wt `[in][out]`) on a ReLU output x: accumulates dwt += x ⊗ dy
+// and db += dy, and writes dx = (wt · dy) where x > 0 (the ReLU that produced x), else 0.
+DYNSCOPE_KERNEL_BODY void linear_backward(float* __restrict dwt, float* __restrict db,
+                                          const float* __restrict wt, const float* __restrict x,
+                                          int64_t in, const float* __restrict dy, int64_t out,
+                                          float* __restrict dx) {
+  for (int64_t i = 0; i < in; ++i) {
+    float* __restrict row = dwt + i * out;
+    const float* __restrict w = wt + i * out;
+    const float v = x[i];
+    float s = 0.0f;
+    for (int64_t o = 0; o < out; ++o) {
+      row[o] += v * dy[o];
+      s += w[o] * dy[o];
+    }
+    dx[i] = v > 0.0f ? s : 0.0f;
+  }
+  for (int64_t o = 0; o < out; ++o) db[o] += dy[o];
+}
+
+// Backward of first_layer's weights (`[n,3]`) and biases for the pre-activation gradient da.
+DYNSCOPE_KERNEL_BODY void first_layer_backward(float* __restrict dw, float* __restrict db,
+                                               const float* __restrict r,
+                                               const float* __restrict da, int64_t n) {
+  for (int64_t o = 0; o < n; ++o) {
+    db[o] += da[o];
+    for (int d3 = 0; d3 < 3; ++d3) dw[o * 3 + d3] += da[o] * r[d3];
+  }
+}
+
 // Gradients of the MLP aggregation for rows [begin, end): recomputes each neighbour's h and e,
 // then backpropagates through the outer product, the gate and both MLPs. `d_feat` is this
 // worker's `[N,C]` buffer (or null), `dw` its weight-gradient buffer, `d_gate` `[M,K]` (or null).
@@ -191,53 +221,13 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
       }
       for (int64_t jj = 0; jj < j; ++jj) dh[jj] *= gate;
       // WeightNet: h = W3 h2 + b3, h2 = relu(W2 h1 + b2), h1 = relu(W1 r + b1).
-      for (int64_t l = 0; l < hd; ++l) {
-        float* __restrict row = dw + lay.w3t + l * j;
-        const float* __restrict w = a.w3t + l * j;
-        const float v = h2[l];
-        float s = 0.0f;
-        for (int64_t jj = 0; jj < j; ++jj) {
-          row[jj] += v * dh[jj];
-          s += w[jj] * dh[jj];
-        }
-        dh2[l] = v > 0.0f ? s : 0.0f;
-      }
-      for (int64_t jj = 0; jj < j; ++jj) dw[lay.b3 + jj] += dh[jj];
-      for (int64_t i2 = 0; i2 < hd; ++i2) {
-        float* __restrict row = dw + lay.w2t + i2 * hd;
-        const float* __restrict w = a.w2t + i2 * hd;
-        const float v = h1[i2];
-        float s = 0.0f;
-        for (int64_t o = 0; o < hd; ++o) {
-          row[o] += v * dh2[o];
-          s += w[o] * dh2[o];
-        }
-        dh1[i2] = v > 0.0f ? s : 0.0f;
-      }
-      for (int64_t o = 0; o < hd; ++o) {
-        dw[lay.b2 + o] += dh2[o];
-        dw[lay.b1 + o] += dh1[o];
-        for (int d3 = 0; d3 < 3; ++d3) dw[lay.w1 + o * 3 + d3] += dh1[o] * r[d3];
-      }
+      linear_backward(dw + lay.w3t, dw + lay.b3, a.w3t, h2, hd, dh, j, dh2);
+      linear_backward(dw + lay.w2t, dw + lay.b2, a.w2t, h1, hd, dh2, hd, dh1);
+      first_layer_backward(dw + lay.w1, dw + lay.b1, r, dh1, hd);
       if (p > 0) {
         // e = E2 p1 + c2, p1 = relu(E1 r + c1); de = dx[C:].
-        const float* de = dx + c;
-        for (int64_t l = 0; l < ph; ++l) {
-          float* __restrict row = dw + lay.e2t + l * p;
-          const float* __restrict w = a.e2t + l * p;
-          const float v = p1[l];
-          float s = 0.0f;
-          for (int64_t o = 0; o < p; ++o) {
-            row[o] += v * de[o];
-            s += w[o] * de[o];
-          }
-          dp1[l] = v > 0.0f ? s : 0.0f;
-        }
-        for (int64_t o = 0; o < p; ++o) dw[lay.c2 + o] += de[o];
-        for (int64_t l = 0; l < ph; ++l) {
-          dw[lay.c1 + l] += dp1[l];
-          for (int d3 = 0; d3 < 3; ++d3) dw[lay.e1 + l * 3 + d3] += dp1[l] * r[d3];
-        }
+        linear_backward(dw + lay.e2t, dw + lay.c2, a.e2t, p1, ph, dx + c, p, dp1);
+        first_layer_backward(dw + lay.e1, dw + lay.c1, r, dp1, ph);
       }
     }
   }
