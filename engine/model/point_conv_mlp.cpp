@@ -140,6 +140,7 @@ DYNSCOPE_KERNEL_BODY void linear_backward(float* __restrict dwt, float* __restri
     const float* __restrict w = wt + i * out;
     const float v = x[i];
     float s = 0.0f;
+#pragma omp simd reduction(+ : s)
     for (int64_t o = 0; o < out; ++o) {
       row[o] += v * dy[o];
       s += w[o] * dy[o];
