@@ -28,7 +28,7 @@ namespace {
 struct TrainArgs {
   std::string recipe;
   std::vector<std::string> data;
-  std::string out, model, target, input, faces, scale, log;
+  std::string out, model, target, input, faces, scale, log, lr_schedule;
   int epochs = 0, samples = 0, batch = 0, threads = 0, checkpoint_every = 0, width = 0, levels = 0,
       bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0;
   int64_t max_steps = 0;
@@ -68,6 +68,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--checkpoint-every")) o.checkpoint_every = a.checkpoint_every;
   if (given(a, "--max-steps")) o.max_steps = a.max_steps;
   if (given(a, "--lr")) o.lr = a.lr;
+  if (given(a, "--lr-schedule")) o.lr_schedule = a.lr_schedule;
   if (given(a, "--noise-std")) o.noise_std = a.noise_std;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
@@ -94,6 +95,13 @@ TrainOptions build_options(const TrainArgs& a) {
   if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory (--data or recipe)");
   if (o.out.empty()) throw ValueError("out", "no checkpoint path (--out or recipe)");
   require_output_directory("--out", o.out);
+  if (!o.log_csv.empty()) {
+    // A recipe's log lives under out/, which a fresh clone does not have yet: make its directory
+    // (an existing file where a directory should be is reported just below, before any work).
+    std::error_code ignored;
+    std::filesystem::create_directories(std::filesystem::path(o.log_csv).parent_path(), ignored);
+    require_output_directory("--log", o.log_csv);
+  }
   return o;
 }
 
@@ -179,7 +187,10 @@ void add_train_command(CLI::App& app) {
       "train",
       "Train a dynamics model (Adam, Huber loss on p(t+1), one random frame per scene per draw,\n"
       "random-walk noise on input velocities). Writes CKPT, CKPT.state (for --resume) and\n"
-      "CKPT.recipe.json (every resolved option; `--recipe CKPT.recipe.json` repeats the run).\n"
+      "CKPT.recipe.json (every resolved option; `--recipe CKPT.recipe.json` repeats the run;\n"
+      "its \"progress\" says the steps done, the wall time and sittings summed over resumes).\n"
+      "After every epoch's validation the checkpoint with the lowest validation rollout error\n"
+      "so far is kept as X.best.pt (model selection on the validation split, never test).\n"
       "A recipe's \"datasets\" list is generated first when a directory has no manifest, so\n"
       "`dynscope train --recipe assets/recipes/NAME.json` reproduces a shipped checkpoint.\n"
       "Defaults follow the paper's supplement by dataset scale (movi-* = kubric: lr 5e-3,\n"
@@ -205,6 +216,8 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--samples-per-scene", a->samples, "Draws per training scene per epoch");
   cmd->add_option("--batch", a->batch, "Scenes per optimiser step (default 1)");
   cmd->add_option("--lr", a->lr, "Adam learning rate (default by scale)");
+  cmd->add_option("--lr-schedule", a->lr_schedule,
+                  "constant (default) or cosine: decay to 1% of --lr over all epochs");
   cmd->add_option(
       "--noise-std", a->noise_std,
       "Random-walk noise std on input velocities, scene units per frame (default 3e-4)");

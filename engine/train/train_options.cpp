@@ -1,6 +1,7 @@
 // TrainOptions JSON round trip and resolution against the dataset scale.
 #include "engine/train/train_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -67,7 +68,8 @@ std::string TrainOptions::to_json() const {
   if (!datasets.empty()) {
     nlohmann::json list = nlohmann::json::array();
     for (const DatasetRecipe& d : datasets) {
-      list.push_back({{"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}});
+      list.push_back(
+          {{"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}});
     }
     j["datasets"] = list;
   }
@@ -87,6 +89,7 @@ std::string TrainOptions::to_json() const {
   j["world_size"] = world_size;
   j["effective_batch"] = static_cast<int64_t>(batch) * world_size;
   j["lr"] = lr;
+  j["lr_schedule"] = lr_schedule;
   j["noise_std"] = noise_std;
   j["huber_delta"] = huber_delta;
   j["max_steps"] = max_steps;
@@ -97,6 +100,7 @@ std::string TrainOptions::to_json() const {
   j["seed"] = seed;
   j["log"] = log_csv;
   if (!notes_json.empty()) j["notes"] = nlohmann::json::parse(notes_json);
+  if (!progress_json.empty()) j["progress"] = nlohmann::json::parse(progress_json);
   return j.dump(2) + "\n";
 }
 
@@ -147,6 +151,11 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     }
     field = "notes";
     if (j.contains("notes")) o.notes_json = j.at("notes").dump();
+    field = "progress";
+    if (j.contains("progress")) {
+      if (!j.at("progress").is_object()) throw ValueError("progress", "must be a JSON object");
+      o.progress_json = j.at("progress").dump();
+    }
     get("out", o.out);
     get("scale", o.scale);
     field = "model_config";
@@ -176,6 +185,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
       }
     }
     get("lr", o.lr);
+    get("lr_schedule", o.lr_schedule);
     get("noise_std", o.noise_std);
     get("huber_delta", o.huber_delta);
     get("max_steps", o.max_steps);
@@ -230,6 +240,9 @@ void TrainOptions::resolve(const std::string& scenario) {
   in_range("batch", batch, 1, 65536, false);
   in_range("world_size", world_size, 1, 65536, false);
   in_range("lr", lr, 0, 10, true);
+  if (lr_schedule != "constant" && lr_schedule != "cosine") {
+    throw ValueError("lr-schedule", "must be constant or cosine, got '" + lr_schedule + "'");
+  }
   in_range("huber-delta", huber_delta, 0, 1e6, true);
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
   in_range("val-frames", val_frames, 1, 1e6, false);
@@ -254,7 +267,25 @@ void TrainOptions::resolve(const std::string& scenario) {
   }
 }
 
+double learning_rate_at(const TrainOptions& o, int64_t step, int64_t total) {
+  if (o.lr_schedule != "cosine" || total <= 1) return o.lr;
+  const double progress =
+      std::clamp(static_cast<double>(step) / static_cast<double>(total - 1), 0.0, 1.0);
+  const double pi = std::acos(-1.0);
+  return o.lr * (kCosineFinalFraction +
+                 (1.0 - kCosineFinalFraction) * 0.5 * (1.0 + std::cos(pi * progress)));
+}
+
 std::string train_state_path(const std::string& checkpoint) { return checkpoint + ".state"; }
+
+std::string best_checkpoint_path(const std::string& checkpoint) {
+  const std::string ext = ".pt";
+  if (checkpoint.size() > ext.size() &&
+      checkpoint.compare(checkpoint.size() - ext.size(), ext.size(), ext) == 0) {
+    return checkpoint.substr(0, checkpoint.size() - ext.size()) + ".best.pt";
+  }
+  return checkpoint + ".best.pt";
+}
 std::string recipe_path(const std::string& checkpoint) { return checkpoint + ".recipe.json"; }
 
 SamplingOptions checkpoint_sampling(const std::string& checkpoint, const ModelConfig& config) {

@@ -23,12 +23,16 @@ struct DatasetRecipe {
 };
 
 struct TrainOptions {
-  std::vector<std::string> data_dirs;  ///< One or more `dynscope generate` outputs, all of one
-                                       ///< scale (e.g. every Physion-like scenario).
+  std::vector<std::string> data_dirs;   ///< One or more `dynscope generate` outputs, all of one
+                                        ///< scale (e.g. every Physion-like scenario).
   std::vector<DatasetRecipe> datasets;  ///< How to regenerate data_dirs (recipe files).
   std::string description;              ///< What the recipe trains (free text).
   std::string notes_json;               ///< "notes" of a recipe file (any JSON, kept verbatim):
                                         ///< wall time, dataset size, final losses of the run.
+  std::string progress_json;            ///< "progress" of a checkpoint's recipe (JSON object,
+                                        ///< written by training, kept verbatim): steps done and
+                                        ///< planned, wall time and chunks summed over resumes,
+                                        ///< the epoch with the best validation rollout error.
   std::string out;            ///< Checkpoint path; CKPT.state and CKPT.recipe.json sit next to it.
   std::string scale;          ///< "kubric" | "physion" | "" (from the scenario: movi-* → kubric).
   ModelConfig model;          ///< Architecture; voxel and radius come from the scale preset unless
@@ -46,9 +50,12 @@ struct TrainOptions {
                               ///< batch × world_size (the same examples, steps and lr as one
                               ///< process with that batch).
   double lr = 0.0;            ///< Adam learning rate; 0: 5e-3 / 1e-3.
-  double noise_std = 3e-4;    ///< Std of the random-walk noise on input velocities (units/frame).
-  double huber_delta = 1.0;   ///< Huber transition point in target-std units.
-  int64_t max_steps = 0;      ///< Stop after this many steps in total (0: all epochs).
+  /// "constant", or "cosine": the learning rate of step s of S decays from lr to
+  /// kCosineFinalFraction × lr along half a cosine (learning_rate_at).
+  std::string lr_schedule = "constant";
+  double noise_std = 3e-4;     ///< Std of the random-walk noise on input velocities (units/frame).
+  double huber_delta = 1.0;    ///< Huber transition point in target-std units.
+  int64_t max_steps = 0;       ///< Stop after this many steps in total (0: all epochs).
   int checkpoint_every = 200;  ///< Write checkpoint and training state every N steps.
   int val_scenes = 4;          ///< Validation scenes used for the loss and the short rollout.
   int val_frames = 8;          ///< Frames of the validation rollout (observed ones included).
@@ -69,10 +76,19 @@ struct TrainOptions {
   void resolve(const std::string& scenario);
 };
 
+/// Final learning rate of the cosine schedule, as a fraction of the initial one.
+constexpr double kCosineFinalFraction = 0.01;
+
+/// Learning rate of step `step` (0-based) of a run of `total` steps under `o.lr_schedule`.
+double learning_rate_at(const TrainOptions& o, int64_t step, int64_t total);
+
 /// CKPT + ".state": optimiser state and step for --resume.
 std::string train_state_path(const std::string& checkpoint);
 /// CKPT + ".recipe.json": the resolved options, read back by rollout, eval and trace.
 std::string recipe_path(const std::string& checkpoint);
+/// The checkpoint with the lowest validation rollout error of a run writing `checkpoint`: X.pt
+/// becomes X.best.pt (any other name gets ".best.pt" appended); it has its own recipe file.
+std::string best_checkpoint_path(const std::string& checkpoint);
 
 /// Sampling a checkpoint was trained with: its recipe file when present, else the defaults for
 /// the scenario with `input` from the model config. Throws FormatError for a malformed recipe.

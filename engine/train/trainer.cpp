@@ -15,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <thread>
 #include <utility>
@@ -215,14 +216,27 @@ NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target)
   return acc.finish(1e-6);
 }
 
-void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t step,
+// What a run has done before a resume, kept in the training state beside the optimiser.
+struct RunProgress {
+  int64_t step = 0;
+  double wall_seconds = 0.0;  // summed over every chunk so far
+  int64_t chunks = 0;
+  int64_t best_step = -1;  // step of the best validation rollout error (-1: none yet)
+  double best_val_error = std::numeric_limits<double>::infinity();
+};
+
+void save_state(const std::string& path, torch::optim::Adam& optimizer, const RunProgress& p,
                 const std::string& config_json, int world_size) {
   TempFile temp(path);
   torch::serialize::OutputArchive archive;
   optimizer.save(archive);
-  archive.write("step", c10::IValue(step));
+  archive.write("step", c10::IValue(p.step));
   archive.write("config", c10::IValue(config_json));
   archive.write("world_size", c10::IValue(static_cast<int64_t>(world_size)));
+  archive.write("wall_seconds", c10::IValue(p.wall_seconds));
+  archive.write("chunks", c10::IValue(p.chunks));
+  archive.write("best_step", c10::IValue(p.best_step));
+  archive.write("best_val_error", c10::IValue(p.best_val_error));
   try {
     archive.save_to(temp.path());
   } catch (const c10::Error& e) {
@@ -231,8 +245,8 @@ void save_state(const std::string& path, torch::optim::Adam& optimizer, int64_t 
   temp.commit();
 }
 
-int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
-                   const std::string& config_json, int world_size) {
+RunProgress load_state(const std::string& path, torch::optim::Adam& optimizer,
+                       const std::string& config_json, int world_size) {
   if (!std::filesystem::exists(path)) {
     throw IoError(path,
                   "training state missing; cannot --resume (was the run started with "
@@ -258,7 +272,14 @@ int64_t load_state(const std::string& path, torch::optim::Adam& optimizer,
                           " (this run has " + std::to_string(world_size) + ")");
   }
   optimizer.load(archive);
-  return step.toInt();
+  RunProgress p;
+  p.step = step.toInt();
+  c10::IValue value;
+  if (archive.try_read("wall_seconds", value)) p.wall_seconds = value.toDouble();
+  if (archive.try_read("chunks", value)) p.chunks = value.toInt();
+  if (archive.try_read("best_step", value)) p.best_step = value.toInt();
+  if (archive.try_read("best_val_error", value)) p.best_val_error = value.toDouble();
+  return p;
 }
 
 // FNV-1a over the bytes of every parameter and buffer, in module order.
@@ -348,10 +369,10 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   init_lock.unlock();
   const std::string config_json = model->config().to_json();
   torch::optim::Adam optimizer(model->parameters(), torch::optim::AdamOptions(o.lr));
-  int64_t step = 0;
+  RunProgress done;
   if (o.resume) {
     load_checkpoint_weights(o.out, model);
-    step = load_state(train_state_path(o.out), optimizer, config_json, world);
+    done = load_state(train_state_path(o.out), optimizer, config_json, world);
   } else if (leader) {
     model->set_stats(compute_stats(train, o.model.target));
   }
@@ -366,16 +387,35 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   const int64_t draws = n_train * o.samples_per_scene;
   const int64_t global_batch = static_cast<int64_t>(o.batch) * world;
   const int64_t steps_per_epoch = (draws + global_batch - 1) / global_batch;
-  int64_t total = steps_per_epoch * o.epochs;
+  // The learning-rate schedule spans every epoch; max_steps only ends a run (or a chunk) early.
+  const int64_t schedule_steps = steps_per_epoch * o.epochs;
+  int64_t total = schedule_steps;
   if (o.max_steps > 0) total = std::min(total, o.max_steps);
 
+  int64_t step = done.step;
+  ++done.chunks;
   TrainResult result;
   result.start_step = step;
   result.steps_per_epoch = steps_per_epoch;
   result.world_size = world;
   CsvLog log(leader ? o.log_csv : std::string(), o.resume);
-  if (leader) write_text_file_atomically(recipe_path(o.out), o.to_json());
   const auto t0 = std::chrono::steady_clock::now();
+  const double wall_before = done.wall_seconds;
+  // The recipe beside a checkpoint records what the run has done so far, over every chunk.
+  auto write_recipe = [&](const std::string& checkpoint) {
+    nlohmann::json p = {{"steps", step},
+                        {"total_steps", total},
+                        {"steps_per_epoch", steps_per_epoch},
+                        {"wall_time_s", std::round(done.wall_seconds * 10.0) / 10.0},
+                        {"chunks", done.chunks}};
+    if (done.best_step >= 0) {
+      p["best"] = {{"step", done.best_step}, {"val_rollout_error", done.best_val_error}};
+    }
+    TrainOptions recorded = o;
+    recorded.progress_json = p.dump();
+    write_text_file_atomically(recipe_path(checkpoint), recorded.to_json());
+  };
+  if (leader) write_recipe(o.out);
   std::unique_ptr<Progress> progress;
   if (show_progress && leader) progress = std::make_unique<Progress>("train", total - step);
   auto seconds = [&] {
@@ -435,8 +475,11 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   int64_t epoch_steps = 0;
   auto save = [&] {
     if (!leader) return;
+    done.step = step;
+    done.wall_seconds = wall_before + seconds();
     save_checkpoint(o.out, model);
-    save_state(train_state_path(o.out), optimizer, step, config_json, world);
+    save_state(train_state_path(o.out), optimizer, done, config_json, world);
+    write_recipe(o.out);
   };
   const std::vector<torch::Tensor> parameters = model->parameters();
 
@@ -472,6 +515,10 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
       result.allreduce_seconds +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_reduce).count();
       value = total_loss.item<double>();
+    }
+    const double lr = learning_rate_at(o, step, schedule_steps);
+    for (torch::optim::OptimizerParamGroup& g : optimizer.param_groups()) {
+      static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
     }
     optimizer.step();
     result.train_seconds +=
@@ -513,6 +560,16 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
         }
         val_loss = rep.val_loss = sum / static_cast<double>(n);
         val_err = rep.val_rollout_error = err / static_cast<double>(val.size());
+        // Model selection on the validation split: the best epoch so far is kept beside the
+        // run's latest checkpoint.
+        if (leader && val_err < done.best_val_error) {
+          done.best_val_error = val_err;
+          done.best_step = step;
+          done.wall_seconds = wall_before + seconds();
+          const std::string best = best_checkpoint_path(o.out);
+          save_checkpoint(best, model);
+          write_recipe(best);
+        }
       }
       result.epochs.push_back(rep);
       if (leader) {
@@ -535,6 +592,9 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   if (result.start_step == step) save();
   if (progress) progress->finish();
   result.steps = step;
+  result.wall_seconds = done.wall_seconds;
+  result.chunks = done.chunks;
+  result.best_step = done.best_step;
   result.parameter_digest = parameter_digest(model);
   if (group) {
     const std::vector<std::string> digests =

@@ -30,6 +30,9 @@ struct TrainResult {
   uint64_t parameter_digest = 0;
   double allreduce_seconds = 0.0;  ///< Time inside the gradient all-reduces (data-parallel).
   double train_seconds = 0.0;      ///< Wall time of the steps.
+  double wall_seconds = 0.0;       ///< Wall time of the run, summed over every chunk (resumes).
+  int64_t chunks = 0;              ///< Sittings of the run: 1, plus one per resume.
+  int64_t best_step = -1;          ///< Step of the best validation rollout error (-1: none).
 };
 
 class ProcessGroup;

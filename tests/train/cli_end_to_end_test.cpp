@@ -139,6 +139,7 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
         {{"out", data + "/roll"}, {"scenario", "roll"}, {"count", 10}, {"seed", 4}}}},
       {"data", {data + "/drop", data + "/roll"}},
       {"out", (dir / "a.pt").string()},
+      {"log", (dir / "logs" / "train" / "a.csv").string()},
       {"model_config",
        {{"width", 8},
         {"levels", 2},
@@ -155,6 +156,7 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
   ASSERT_EQ(run("train --recipe " + recipe), 0);
   EXPECT_TRUE(fs::exists(fs::path(data) / "drop" / "manifest.json"));
   EXPECT_TRUE(fs::exists(fs::path(data) / "roll" / "manifest.json"));
+  EXPECT_TRUE(fs::exists(dir / "logs" / "train" / "a.csv")) << "the log's directories are made";
   // The written recipe keeps datasets and notes; running it again gives the same weights.
   const std::string again = (dir / "b.pt").string();
   ASSERT_EQ(run("train --recipe " + (dir / "a.pt.recipe.json").string() + " --out " + again), 0);

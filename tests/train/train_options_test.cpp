@@ -67,5 +67,24 @@ TEST(TrainOptions, ResolveRefusesValuesOutsideTheirRange) {
   expect_has(resolve_error(R"({"model_config": {"k": 100000}})"), "model_config.k");
 }
 
+TEST(TrainOptions, LearningRateSchedules) {
+  TrainOptions o;
+  o.lr = 2e-3;
+  EXPECT_DOUBLE_EQ(learning_rate_at(o, 0, 100), 2e-3);
+  EXPECT_DOUBLE_EQ(learning_rate_at(o, 99, 100), 2e-3);
+  o.lr_schedule = "cosine";
+  EXPECT_DOUBLE_EQ(learning_rate_at(o, 0, 101), 2e-3);
+  EXPECT_NEAR(learning_rate_at(o, 50, 101), 2e-3 * (kCosineFinalFraction + 1.0) / 2.0, 1e-15);
+  EXPECT_NEAR(learning_rate_at(o, 100, 101), 2e-3 * kCosineFinalFraction, 1e-15);
+  for (int64_t s = 1; s < 101; ++s) {
+    EXPECT_LT(learning_rate_at(o, s, 101), learning_rate_at(o, s - 1, 101)) << s;
+  }
+  EXPECT_DOUBLE_EQ(learning_rate_at(o, 0, 1), 2e-3);
+  expect_has(resolve_error(R"({"lr_schedule":"linear"})"),
+             "lr-schedule: must be constant or cosine");
+  EXPECT_EQ(resolve_error(R"({"lr_schedule":"cosine"})"), "");
+  expect_has(parse_error(R"({"progress":3})"), "progress");
+}
+
 }  // namespace
 }  // namespace dynscope

@@ -7,6 +7,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "engine/core/error.h"
 #include "engine/model/checkpoint.h"
@@ -32,6 +35,13 @@ TrainOptions tiny_options(const std::string& out) {
 
 using testing::expect_same_weights;
 
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 TEST(TrainerTest, ResumedRunEqualsUninterruptedRun) {
   const fs::path dir =
       fs::temp_directory_path() / ("dynscope_train_test_resume_" + std::to_string(getpid()));
@@ -52,6 +62,67 @@ TEST(TrainerTest, ResumedRunEqualsUninterruptedRun) {
   EXPECT_EQ(r.steps, 4);
   expect_same_weights(straight.out, second.out);
   EXPECT_TRUE(fs::exists(recipe_path(second.out)));
+}
+
+// A run in sittings (the way a long budget is spent): the cosine learning rate, the data and the
+// optimiser continue exactly, the recipe sums steps, wall time and sittings, and the checkpoint of
+// the best validation epoch is kept with its own recipe.
+TEST(TrainerTest, ACosineRunInChunksEqualsOneSittingAndKeepsItsBestEpoch) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_chunks_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  auto options = [&](const std::string& name) {
+    TrainOptions o = tiny_options((dir / name).string());
+    o.lr_schedule = "cosine";
+    o.lr = 3e-3;
+    o.epochs = 2;
+    o.samples_per_scene = 1;  // 8 training scenes: 8 steps per epoch, 16 in all
+    return o;
+  };
+  const TrainOptions straight = options("straight.pt");
+  const TrainResult whole = train_model(straight);
+  ASSERT_EQ(whole.steps, 16);
+  EXPECT_EQ(whole.chunks, 1);
+
+  TrainOptions chunk = options("chunks.pt");
+  chunk.max_steps = 5;
+  EXPECT_EQ(train_model(chunk).steps, 5);
+  chunk.max_steps = 11;
+  chunk.resume = true;
+  EXPECT_EQ(train_model(chunk).steps, 11);
+  chunk.max_steps = 0;
+  const TrainResult last = train_model(chunk);
+  EXPECT_EQ(last.start_step, 11);
+  EXPECT_EQ(last.steps, 16);
+  EXPECT_EQ(last.chunks, 3);
+  EXPECT_GE(last.wall_seconds, last.train_seconds);
+  expect_same_weights(straight.out, chunk.out);
+
+  const TrainOptions recorded =
+      TrainOptions::from_json(read_text_file(recipe_path(chunk.out)), "recipe");
+  const nlohmann::json progress = nlohmann::json::parse(recorded.progress_json);
+  EXPECT_EQ(progress.at("steps"), 16);
+  EXPECT_EQ(progress.at("total_steps"), 16);
+  EXPECT_EQ(progress.at("chunks"), 3);
+  EXPECT_GT(progress.at("wall_time_s").get<double>(), 0.0);
+  EXPECT_EQ(recorded.lr_schedule, "cosine");
+
+  // The best of the two validated epochs (steps 8 and 16), chosen on validation alone.
+  const int64_t best = progress.at("best").at("step").get<int64_t>();
+  ASSERT_TRUE(best == 8 || best == 16) << best;
+  EXPECT_EQ(best, whole.best_step);
+  const std::string best_path = best_checkpoint_path(chunk.out);
+  EXPECT_EQ(best_path, (dir / "chunks.best.pt").string());
+  ASSERT_TRUE(fs::exists(best_path));
+  EXPECT_TRUE(fs::exists(recipe_path(best_path)));
+  const double first_error = whole.epochs.at(0).val_rollout_error;
+  const double second_error = whole.epochs.at(1).val_rollout_error;
+  EXPECT_EQ(best, second_error < first_error ? 16 : 8);
+  TrainOptions at_best = options("at_best.pt");
+  at_best.max_steps = best;
+  train_model(at_best);
+  expect_same_weights(at_best.out, best_path);
+  fs::remove_all(dir);
 }
 
 TEST(TrainerTest, ResumeWithAnotherArchitectureIsAClearError) {
