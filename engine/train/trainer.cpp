@@ -561,8 +561,9 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
         val_loss = rep.val_loss = sum / static_cast<double>(n);
         val_err = rep.val_rollout_error = err / static_cast<double>(val.size());
         // Model selection on the validation split: the best epoch so far is kept beside the
-        // run's latest checkpoint.
-        if (leader && val_err < done.best_val_error) {
+        // run's latest checkpoint. Only whole epochs compete, so where a sitting happens to end
+        // cannot change which checkpoint is kept.
+        if (leader && step % steps_per_epoch == 0 && val_err < done.best_val_error) {
           done.best_val_error = val_err;
           done.best_step = step;
           done.wall_seconds = wall_before + seconds();
