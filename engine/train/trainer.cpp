@@ -274,6 +274,7 @@ RunProgress load_state(const std::string& path, torch::optim::Adam& optimizer,
   optimizer.load(archive);
   RunProgress p;
   p.step = step.toInt();
+  // States written before these fields existed resume with none recorded (zero, no best).
   c10::IValue value;
   if (archive.try_read("wall_seconds", value)) p.wall_seconds = value.toDouble();
   if (archive.try_read("chunks", value)) p.chunks = value.toInt();
@@ -404,7 +405,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   // The recipe beside a checkpoint records what the run has done so far, over every chunk.
   auto write_recipe = [&](const std::string& checkpoint) {
     nlohmann::json p = {{"steps", step},
-                        {"total_steps", total},
+                        {"total_steps", schedule_steps},
                         {"steps_per_epoch", steps_per_epoch},
                         {"wall_time_s", std::round(done.wall_seconds * 10.0) / 10.0},
                         {"chunks", done.chunks}};

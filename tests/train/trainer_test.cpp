@@ -87,6 +87,12 @@ TEST(TrainerTest, ACosineRunInChunksEqualsOneSittingAndKeepsItsBestEpoch) {
   TrainOptions chunk = options("chunks.pt");
   chunk.max_steps = 5;
   EXPECT_EQ(train_model(chunk).steps, 5);
+  // A sitting cut short by max_steps still records the whole run as planned (run.sh reads
+  // steps == total_steps as finished).
+  const nlohmann::json first_sitting = nlohmann::json::parse(
+      TrainOptions::from_json(read_text_file(recipe_path(chunk.out)), "recipe").progress_json);
+  EXPECT_EQ(first_sitting.at("steps"), 5);
+  EXPECT_EQ(first_sitting.at("total_steps"), 16);
   chunk.max_steps = 11;
   chunk.resume = true;
   EXPECT_EQ(train_model(chunk).steps, 11);
