@@ -229,9 +229,10 @@ void print_trace(const std::string& path, const ModelTrace& t, const InfoOptions
   std::printf("%s: trace\n", path.c_str());
   std::printf("  scene      %s, frame %d\n", t.scene_path.c_str(), t.frame);
   if (t.source == kTraceSourceRollout) {
-    std::printf("  source     rollout %s: the pass that predicted frame %d from its own "
-                "predicted frames %d..%d\n",
-                t.rollout_path.c_str(), t.frame + 1, t.frame - 2, t.frame);
+    std::printf(
+        "  source     rollout %s: the pass that predicted frame %d from its own "
+        "predicted frames %d..%d\n",
+        t.rollout_path.c_str(), t.frame + 1, t.frame - 2, t.frame);
   } else {
     std::printf("  source     the scene's ground-truth frames %d..%d\n", t.frame - 2, t.frame);
   }
@@ -254,6 +255,13 @@ void print_checkpoint(const std::string& path, const CheckpointInfo& c, const In
                         {"format_version", c.format_version},
                         {"parameters", c.parameter_count},
                         {"config", nlohmann::json::parse(c.config_json)}};
+    const auto vec = [](const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+    j["stats"] = {{"velocity_mean", vec(c.stats.velocity_mean)},
+                  {"velocity_std", vec(c.stats.velocity_std)},
+                  {"target_mean", vec(c.stats.target_mean)},
+                  {"target_std", vec(c.stats.target_std)},
+                  {"z_mean", c.stats.z_mean},
+                  {"z_std", c.stats.z_std}};
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -263,6 +271,17 @@ void print_checkpoint(const std::string& path, const CheckpointInfo& c, const In
               to_string(c.config.target).c_str(), to_string(c.config.input).c_str());
   std::printf("  size       width %d, %d levels, %lld parameters\n", c.config.width,
               c.config.levels, static_cast<long long>(c.parameter_count));
+  const auto row = [](const char* name, const Vec3& mean, const Vec3& std) {
+    std::printf("  %-10s mean (%.4g, %.4g, %.4g), std (%.4g, %.4g, %.4g)\n", name, mean.x(),
+                mean.y(), mean.z(), std.x(), std.y(), std.z());
+  };
+  row("velocity", c.stats.velocity_mean, c.stats.velocity_std);
+  row(c.config.target == TargetMode::kAcceleration ? "accel" : "target", c.stats.target_mean,
+      c.stats.target_std);
+  std::printf(
+      "  height     mean %.4g, std %.4g (units per frame above; normalisation of the "
+      "inputs and the target)\n",
+      c.stats.z_mean, c.stats.z_std);
   std::printf("  config     %s\n", c.config_json.c_str());
 }
 
@@ -326,8 +345,8 @@ void add_info_command(CLI::App& app) {
       "bounding boxes, vertex/face counts, model points after surface sampling and grid "
       "downsampling), a mesh (any format assimp reads), a rollout, a trace or a checkpoint.");
   cmd->add_option(
-         "file", opt->file,
-         "Scene, rollout or trace (.h5), mesh (.obj, .ply, .stl, .glb, ...) or checkpoint file");
+      "file", opt->file,
+      "Scene, rollout or trace (.h5), mesh (.obj, .ply, .stl, .glb, ...) or checkpoint file");
   cmd->add_option("--voxel", opt->voxel,
                   "Grid downsampling voxel edge for the point counts (default: 0.2 for movi-* "
                   "scenes, 0.05 for other scenes, bounding-box diagonal / 50 for meshes)")

@@ -15,7 +15,6 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <thread>
 #include <utility>
@@ -32,6 +31,7 @@
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/train/process_group_torch.h"
+#include "engine/train/train_state.h"
 
 namespace dynscope {
 
@@ -216,73 +216,6 @@ NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target)
   return acc.finish(1e-6);
 }
 
-// What a run has done before a resume, kept in the training state beside the optimiser.
-struct RunProgress {
-  int64_t step = 0;
-  double wall_seconds = 0.0;  // summed over every chunk so far
-  int64_t chunks = 0;
-  int64_t best_step = -1;  // step of the best validation rollout error (-1: none yet)
-  double best_val_error = std::numeric_limits<double>::infinity();
-};
-
-void save_state(const std::string& path, torch::optim::Adam& optimizer, const RunProgress& p,
-                const std::string& config_json, int world_size) {
-  TempFile temp(path);
-  torch::serialize::OutputArchive archive;
-  optimizer.save(archive);
-  archive.write("step", c10::IValue(p.step));
-  archive.write("config", c10::IValue(config_json));
-  archive.write("world_size", c10::IValue(static_cast<int64_t>(world_size)));
-  archive.write("wall_seconds", c10::IValue(p.wall_seconds));
-  archive.write("chunks", c10::IValue(p.chunks));
-  archive.write("best_step", c10::IValue(p.best_step));
-  archive.write("best_val_error", c10::IValue(p.best_val_error));
-  try {
-    archive.save_to(temp.path());
-  } catch (const c10::Error& e) {
-    throw IoError(path, std::string("cannot write training state: ") + e.what_without_backtrace());
-  }
-  temp.commit();
-}
-
-RunProgress load_state(const std::string& path, torch::optim::Adam& optimizer,
-                       const std::string& config_json, int world_size) {
-  if (!std::filesystem::exists(path)) {
-    throw IoError(path,
-                  "training state missing; cannot --resume (was the run started with "
-                  "this --out?)");
-  }
-  torch::serialize::InputArchive archive;
-  archive.load_from(path);
-  c10::IValue step, config;
-  if (!archive.try_read("step", step) || !archive.try_read("config", config)) {
-    throw FormatError(path, "step", "not a dynscope training state");
-  }
-  if (config.toStringRef() != config_json) {
-    throw FormatError(path, "config",
-                      "the state was saved for another architecture; start without --resume "
-                      "or use the original options");
-  }
-  c10::IValue saved_world;
-  const int64_t saved = archive.try_read("world_size", saved_world) ? saved_world.toInt() : 1;
-  if (saved != world_size) {
-    throw FormatError(path, "world_size",
-                      "the state was saved by a run of " + std::to_string(saved) +
-                          " rank(s); resume it with --nproc " + std::to_string(saved) +
-                          " (this run has " + std::to_string(world_size) + ")");
-  }
-  optimizer.load(archive);
-  RunProgress p;
-  p.step = step.toInt();
-  // States written before these fields existed resume with none recorded (zero, no best).
-  c10::IValue value;
-  if (archive.try_read("wall_seconds", value)) p.wall_seconds = value.toDouble();
-  if (archive.try_read("chunks", value)) p.chunks = value.toInt();
-  if (archive.try_read("best_step", value)) p.best_step = value.toInt();
-  if (archive.try_read("best_val_error", value)) p.best_val_error = value.toDouble();
-  return p;
-}
-
 // FNV-1a over the bytes of every parameter and buffer, in module order.
 uint64_t parameter_digest(DynamicsModel& model) {
   uint64_t h = 1469598103934665603ULL;
@@ -373,7 +306,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   RunProgress done;
   if (o.resume) {
     load_checkpoint_weights(o.out, model);
-    done = load_state(train_state_path(o.out), optimizer, config_json, world);
+    done = load_train_state(train_state_path(o.out), optimizer, config_json, world);
   } else if (leader) {
     model->set_stats(compute_stats(train, o.model.target));
   }
@@ -404,19 +337,13 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   const double wall_before = done.wall_seconds;
   // The recipe beside a checkpoint records what the run has done so far, over every chunk.
   auto write_recipe = [&](const std::string& checkpoint) {
-    nlohmann::json p = {{"steps", step},
-                        {"total_steps", schedule_steps},
-                        {"steps_per_epoch", steps_per_epoch},
-                        {"wall_time_s", std::round(done.wall_seconds * 10.0) / 10.0},
-                        {"chunks", done.chunks}};
-    if (done.best_step >= 0) {
-      p["best"] = {{"step", done.best_step}, {"val_rollout_error", done.best_val_error}};
-    }
     TrainOptions recorded = o;
-    recorded.progress_json = p.dump();
+    recorded.progress_json = progress_record(done, step, schedule_steps, steps_per_epoch);
     write_text_file_atomically(recipe_path(checkpoint), recorded.to_json());
   };
-  if (leader) write_recipe(o.out);
+  // A new run's recipe is there from the start; a resumed run's already says what it has done,
+  // and is rewritten at its next save (a sitting stopped before it then counts for nothing).
+  if (leader && !o.resume) write_recipe(o.out);
   std::unique_ptr<Progress> progress;
   if (show_progress && leader) progress = std::make_unique<Progress>("train", total - step);
   auto seconds = [&] {
@@ -479,7 +406,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     done.step = step;
     done.wall_seconds = wall_before + seconds();
     save_checkpoint(o.out, model);
-    save_state(train_state_path(o.out), optimizer, done, config_json, world);
+    save_train_state(train_state_path(o.out), optimizer, done, config_json, world);
     write_recipe(o.out);
   };
   const std::vector<torch::Tensor> parameters = model->parameters();

@@ -118,6 +118,19 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   EXPECT_EQ(info_kind(trace), "trace");
   EXPECT_EQ(info_kind(ckpt), "checkpoint");
   EXPECT_EQ(info_kind(scene), "scene");
+  {
+    // A checkpoint's description carries the normalisation statistics it was trained with.
+    const test::CommandResult r = test::run_dynscope("info --json " + ckpt);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json stats = nlohmann::json::parse(r.output).at("stats");
+    for (const char* key : {"velocity_std", "target_std"}) {
+      ASSERT_EQ(stats.at(key).size(), 3u) << key;
+      for (const double s : stats.at(key)) {
+        EXPECT_GT(s, 0.0) << key;
+        EXPECT_NE(s, 1.0) << key << " is the untrained default";
+      }
+    }
+  }
   // Bad input: one clear line, non-zero exit.
   EXPECT_NE(run("eval --checkpoint " + ckpt + " --data " + data + " --split training"), 0);
   EXPECT_NE(run("rollout --checkpoint " + (dir / "missing.pt").string() + " --scene " + scene +
