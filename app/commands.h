@@ -21,6 +21,8 @@ void add_train_command(CLI::App& app);
 void add_rollout_command(CLI::App& app);
 /// `dynscope eval`: point error and contact accuracy over a dataset split, with a baseline.
 void add_eval_command(CLI::App& app);
+/// `dynscope compare`: runs' evaluations over seeds, with paired per-scene differences.
+void add_compare_command(CLI::App& app);
 /// `dynscope trace`: record one forward pass of a checkpoint into an HDF5 trace file.
 void add_trace_command(CLI::App& app);
 /// `dynscope explain`: divergence and gradient × input attribution of a rollout pass.

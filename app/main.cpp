@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   dynscope::app::add_train_command(app);
   dynscope::app::add_rollout_command(app);
   dynscope::app::add_eval_command(app);
+  dynscope::app::add_compare_command(app);
   dynscope::app::add_trace_command(app);
   dynscope::app::add_explain_command(app);
   dynscope::app::add_view_command(app);

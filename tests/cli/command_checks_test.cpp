@@ -129,6 +129,30 @@ TEST_F(CommandChecks, RenderRefusesAnInputInsideItsOutputUnderAnOutputName) {
   expect_refused("render " + scene_ + " --out " + scene_, {"--out", "input"});
 }
 
+TEST_F(CommandChecks, CompareRefusesMismatchedMalformedOrOverwrittenEvaluations) {
+  auto write_eval = [this](const std::string& name, const std::string& scene, double end) {
+    std::ofstream(path(name)) << R"({"dir":"d","split":"test","observed_frames":3,)"
+                              << R"("sampling_voxel":0.3,"contact_threshold":0.3,"scenes":[)"
+                              << R"({"file":")" << scene << R"(","scenario":"movi-a","frames":2,)"
+                              << R"("label":-1,"error_curve":[0,)" << end
+                              << R"(],"baseline_error_curve":[0,4]}]})";
+  };
+  write_eval("a.json", "s0.h5", 1.0);
+  write_eval("b.json", "s0.h5", 2.0);
+  write_eval("other.json", "s9.h5", 2.0);
+  const auto ok = run_dynscope("compare A=" + path("a.json") + " B=" + path("b.json") + " --json " +
+                               path("c.json"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find("-1.0000 ± 0.0000"), std::string::npos) << ok.output;
+  EXPECT_TRUE(fs::exists(path("c.json")));
+  expect_refused("compare A=" + path("a.json") + " B=" + path("other.json"), {"s9.h5"});
+  expect_refused("compare A=" + path("a.json") + " --json " + path("a.json"),
+                 {"--json", "evaluation of A"});
+  expect_refused("compare A=" + path("a.json") + "," + path("missing.json"), {"missing.json"});
+  expect_refused("compare A=" + scene_, {"scene.h5"});
+  expect_refused("compare =" + path("a.json"), {"label"});
+}
+
 TEST_F(CommandChecks, OptionsOutsideTheirRangeNameTheRange) {
   const std::string rollout =
       "rollout --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + path("r.h5");

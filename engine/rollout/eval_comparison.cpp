@@ -1,0 +1,297 @@
+// Comparing evaluations over seeds and scenes.
+#include "engine/rollout/eval_comparison.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "engine/core/error.h"
+
+namespace dynscope {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Mean and sample standard deviation (0 for fewer than two values).
+void mean_sd(const std::vector<double>& v, double* mean, double* sd) {
+  double m = 0.0;
+  for (double x : v) m += x;
+  m /= static_cast<double>(v.size());
+  double ss = 0.0;
+  for (double x : v) ss += (x - m) * (x - m);
+  *mean = m;
+  *sd = v.size() > 1 ? std::sqrt(ss / static_cast<double>(v.size() - 1)) : 0.0;
+}
+
+std::string fmt(const char* format, double a, double b = 0.0) {
+  char text[64];
+  std::snprintf(text, sizeof text, format, a, b);
+  return text;
+}
+
+}  // namespace
+
+EvalSummary read_eval_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError(path, "cannot open evaluation file");
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::parse_error& e) {
+    throw FormatError(path, "json",
+                      "not a JSON file (parse error at byte " + std::to_string(e.byte) +
+                          "); expected what `dynscope eval --json` writes");
+  }
+  const char* field = "split";
+  try {
+    DatasetSplit split;
+    split.dir = j.at("dir").get<std::string>();
+    split.split = j.at("split").get<std::string>();
+    EvalOptions options;
+    field = "observed_frames";
+    options.observed_frames = j.at("observed_frames").get<int>();
+    field = "sampling_voxel";
+    const double voxel = j.at("sampling_voxel").get<double>();
+    field = "contact_threshold";
+    const double threshold = j.at("contact_threshold").get<double>();
+    field = "scenes";
+    std::vector<SceneEvaluation> scenes;
+    for (const nlohmann::json& s : j.at("scenes")) {
+      SceneEvaluation e;
+      e.file = s.at("file").get<std::string>();
+      e.scenario = s.at("scenario").get<std::string>();
+      e.frames = s.at("frames").get<int>();
+      e.label = s.at("label").get<int>();
+      e.model_curve = s.at("error_curve").get<std::vector<double>>();
+      e.baseline_curve = s.at("baseline_error_curve").get<std::vector<double>>();
+      if (e.model_curve.empty()) throw FormatError(path, "scenes", e.file + " has no error curve");
+      e.has_contact = s.contains("contact");
+      if (e.has_contact) {
+        e.model_contact = s.at("contact").get<bool>();
+        e.truth_contact = s.at("truth_contact").get<bool>();
+        e.baseline_contact = s.at("baseline_contact").get<bool>();
+        e.model_min_distance = s.at("min_distance").get<double>();
+        e.truth_min_distance = s.at("truth_min_distance").get<double>();
+        e.baseline_min_distance = s.at("baseline_min_distance").get<double>();
+      }
+      scenes.push_back(std::move(e));
+    }
+    if (scenes.empty()) throw FormatError(path, "scenes", "the evaluation has no scene");
+    return summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
+  } catch (const nlohmann::json::exception& e) {
+    throw FormatError(path, field, std::string("missing or malformed (") + e.what() + ")");
+  }
+}
+
+EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
+  if (runs.empty()) throw ValueError("runs", "nothing to compare");
+  const EvalSummary* first = nullptr;
+  std::string first_path;
+  std::map<std::string, size_t> scene_index;  // file -> position in the first evaluation
+  for (const RunEvaluations& run : runs) {
+    if (run.seeds.empty()) throw ValueError(run.label, "no evaluation given");
+    for (size_t k = 0; k < run.seeds.size(); ++k) {
+      const EvalSummary& s = run.seeds[k];
+      const std::string path = k < run.paths.size() ? run.paths[k] : run.label;
+      if (!first) {
+        first = &s;
+        first_path = path;
+        for (size_t i = 0; i < s.scenes.size(); ++i) {
+          if (!scene_index.emplace(s.scenes[i].file, i).second) {
+            throw ValueError(path, "scene " + s.scenes[i].file + " appears twice");
+          }
+        }
+        continue;
+      }
+      if (s.split != first->split) {
+        throw ValueError(path, "evaluates the " + s.split + " split, " + first_path + " the " +
+                                   first->split + " split");
+      }
+      std::set<std::string> files;
+      for (const SceneEvaluation& e : s.scenes) {
+        if (!scene_index.count(e.file) || !files.insert(e.file).second) {
+          throw ValueError(path, "scene " + e.file + " is not one of the " +
+                                     std::to_string(first->scenes.size()) + " scenes of " +
+                                     first_path + " (or appears twice)");
+        }
+      }
+      if (files.size() != scene_index.size()) {
+        throw ValueError(path, "evaluates " + std::to_string(files.size()) + " scenes, " +
+                                   first_path + " " + std::to_string(scene_index.size()));
+      }
+    }
+  }
+
+  EvalComparison c;
+  c.split = first->split;
+  c.scenes = static_cast<int>(scene_index.size());
+  c.floor_end_error = c.floor_accuracy = c.truth_accuracy = kNaN;
+  // The floor and the ceiling do not depend on the model: taken from an evaluation that has them.
+  for (const RunEvaluations& run : runs) {
+    for (const EvalSummary& s : run.seeds) {
+      const ScenarioSummary& all = s.scenarios.at("all");
+      if (std::isnan(c.floor_end_error) && !all.baseline_curve.empty()) {
+        c.floor_end_error = all.baseline_end_error;
+        if (all.labelled > 0) c.floor_accuracy = all.baseline_accuracy;
+      }
+      if (std::isnan(c.truth_accuracy) && all.labelled > 0) c.truth_accuracy = all.truth_accuracy;
+    }
+  }
+
+  // Per run: every scene's end error averaged over its seeds, in the first evaluation's order.
+  std::vector<std::vector<double>> per_scene;
+  for (const RunEvaluations& run : runs) {
+    RunStats st;
+    st.label = run.label;
+    st.seeds = static_cast<int>(run.seeds.size());
+    std::vector<double> ends, accuracies;
+    std::vector<double> scene_mean(scene_index.size(), 0.0);
+    for (const EvalSummary& s : run.seeds) {
+      const ScenarioSummary& all = s.scenarios.at("all");
+      ends.push_back(all.model_end_error);
+      st.labelled = all.labelled;
+      if (all.labelled > 0) accuracies.push_back(all.model_accuracy);
+      for (const SceneEvaluation& e : s.scenes) {
+        scene_mean[scene_index.at(e.file)] += e.model_curve.back() / st.seeds;
+      }
+    }
+    mean_sd(ends, &st.end_error_mean, &st.end_error_sd);
+    if (!accuracies.empty()) mean_sd(accuracies, &st.accuracy_mean, &st.accuracy_sd);
+    c.runs.push_back(st);
+    per_scene.push_back(std::move(scene_mean));
+  }
+
+  for (size_t a = 0; a < runs.size(); ++a) {
+    for (size_t b = a + 1; b < runs.size(); ++b) {
+      PairedDifference p;
+      p.a = runs[a].label;
+      p.b = runs[b].label;
+      p.scenes = c.scenes;
+      std::vector<double> d(per_scene[a].size());
+      for (size_t i = 0; i < d.size(); ++i) {
+        d[i] = per_scene[a][i] - per_scene[b][i];
+        if (d[i] < 0) ++p.a_better;
+      }
+      double sd = 0.0;
+      mean_sd(d, &p.mean, &sd);
+      p.std_error = sd / std::sqrt(static_cast<double>(d.size()));
+      const RunStats& ra = c.runs[a];
+      const RunStats& rb = c.runs[b];
+      if (ra.seeds < 2 || rb.seeds < 2) {
+        c.pairs.push_back(p);
+        continue;
+      }
+      p.seed_intervals_overlap =
+          ra.end_error_mean - ra.end_error_sd <= rb.end_error_mean + rb.end_error_sd &&
+          rb.end_error_mean - rb.end_error_sd <= ra.end_error_mean + ra.end_error_sd;
+      c.pairs.push_back(p);
+    }
+  }
+  return c;
+}
+
+std::string comparison_table(const EvalComparison& c) {
+  size_t width = 5;
+  for (const RunStats& r : c.runs) width = std::max(width, r.label.size());
+  const int w = static_cast<int>(width);
+  std::string out;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "%d scenes of the %s split; end error: mean point distance at the last frame, "
+                "mean ± sd over seeds\n",
+                c.scenes, c.split.c_str());
+  out += line;
+  const bool contact = !std::isnan(c.truth_accuracy);
+  std::snprintf(line, sizeof line, "%-*s %5s %18s %9s%s\n", w, "run", "seeds", "end error",
+                "vs floor", contact ? "   contact accuracy" : "");
+  out += line;
+  for (const RunStats& r : c.runs) {
+    std::string ratio =
+        std::isnan(c.floor_end_error) ? "-" : fmt("%.2fx", r.end_error_mean / c.floor_end_error);
+    std::snprintf(line, sizeof line, "%-*s %5d %18s %9s", w, r.label.c_str(), r.seeds,
+                  fmt("%.4f ± %.4f", r.end_error_mean, r.end_error_sd).c_str(), ratio.c_str());
+    out += line;
+    if (contact) {
+      out += r.labelled > 0
+                 ? "   " + fmt("%.1f %% ± %.1f", 100 * r.accuracy_mean, 100 * r.accuracy_sd)
+                 : "   -";
+    }
+    out += "\n";
+  }
+  if (!std::isnan(c.floor_end_error)) {
+    std::snprintf(line, sizeof line, "%-*s %5s %18s %9s", w, "floor", "-",
+                  fmt("%.4f", c.floor_end_error).c_str(), "1.00x");
+    out += line;
+    if (contact && !std::isnan(c.floor_accuracy)) {
+      out += "   " + fmt("%.1f %%", 100 * c.floor_accuracy);
+    }
+    out += "   (constant velocity + gravity)\n";
+  }
+  if (contact) {
+    out += "ceiling: the contact rule on the ground truth, " +
+           fmt("%.1f %%", 100 * c.truth_accuracy) + "\n";
+  }
+  if (c.pairs.empty()) return out;
+  out +=
+      "\npaired per scene (A - B, each scene's end error averaged over seeds first; ± standard "
+      "error over scenes)\n";
+  std::snprintf(line, sizeof line, "%-*s %-*s %20s %14s  %s\n", w, "A", w, "B", "A - B",
+                "A better on", "seed intervals");
+  out += line;
+  for (const PairedDifference& p : c.pairs) {
+    std::snprintf(line, sizeof line, "%-*s %-*s %20s %14s  %s\n", w, p.a.c_str(), w, p.b.c_str(),
+                  fmt("%+.4f ± %.4f", p.mean, p.std_error).c_str(),
+                  (std::to_string(p.a_better) + "/" + std::to_string(p.scenes)).c_str(),
+                  !p.seed_intervals_overlap   ? "- (needs 2+ seeds each)"
+                  : *p.seed_intervals_overlap ? "overlap"
+                                              : "apart");
+    out += line;
+  }
+  return out;
+}
+
+std::string comparison_to_json(const EvalComparison& c) {
+  using nlohmann::json;
+  auto num = [](double v) { return std::isnan(v) ? json(nullptr) : json(v); };
+  json j = {{"split", c.split},
+            {"scenes", c.scenes},
+            {"floor_end_error", num(c.floor_end_error)},
+            {"floor_contact_accuracy", num(c.floor_accuracy)},
+            {"truth_contact_accuracy", num(c.truth_accuracy)},
+            {"runs", json::array()},
+            {"pairs", json::array()}};
+  for (const RunStats& r : c.runs) {
+    json run = {{"label", r.label},
+                {"seeds", r.seeds},
+                {"end_error_mean", r.end_error_mean},
+                {"end_error_sd", r.end_error_sd},
+                {"labelled", r.labelled}};
+    if (r.labelled > 0) {
+      run["contact_accuracy_mean"] = r.accuracy_mean;
+      run["contact_accuracy_sd"] = r.accuracy_sd;
+    }
+    j["runs"].push_back(run);
+  }
+  for (const PairedDifference& p : c.pairs) {
+    j["pairs"].push_back(
+        {{"a", p.a},
+         {"b", p.b},
+         {"scenes", p.scenes},
+         {"mean_difference", p.mean},
+         {"std_error", p.std_error},
+         {"a_better", p.a_better},
+         {"seed_intervals_overlap",
+          p.seed_intervals_overlap ? json(*p.seed_intervals_overlap) : json(nullptr)}});
+  }
+  return j.dump(2) + "\n";
+}
+
+}  // namespace dynscope
