@@ -351,7 +351,8 @@ void ViewerState::open_trace(const std::string& path) {
   const int level = std::min(view_.level, static_cast<int>(trace->levels.size()) - 1);
   view_.level = std::max(level, 0);
   ensure_render_data();
-  install_trace(trace, view_.level, -1);
+  install_trace(trace, view_.level, -1,
+                truth_levels_of(*trace, rollout_ ? &rollout_->rollout : nullptr));
   trace_from_file_ = true;
   view_.frame = trace->frame;
   view_.picked_point = -1;
@@ -442,13 +443,14 @@ void ViewerState::update_jobs() {
     }
   }
   if (trace_job_ && trace_job_->done()) {
-    const std::unique_ptr<BackgroundJob<ModelTrace>> job = std::move(trace_job_);
+    const std::unique_ptr<BackgroundJob<TraceJobResult>> job = std::move(trace_job_);
     if (job->ticket() != ticket() || job->cancelled() || !doc_) {
       ++dropped_;
     } else {
       try {
-        auto trace = std::make_shared<const ModelTrace>(job->take());
-        install_trace(std::move(trace), trace_request_.level, trace_request_.picked);
+        TraceJobResult result = job->take();
+        install_trace(std::make_shared<const ModelTrace>(std::move(result.trace)),
+                      trace_request_.level, trace_request_.picked, std::move(result.truth_levels));
       } catch (...) {
         trace_failed_ = trace_request_;
         throw;
@@ -458,7 +460,7 @@ void ViewerState::update_jobs() {
   update_explain_job();
   if (trace_from_file_ && trace_ && trace_level_ != view_.level &&
       view_.level < static_cast<int>(trace_->levels.size())) {
-    install_trace(trace_, view_.level, -1);
+    install_trace(trace_, view_.level, -1, truth_levels_);
   }
   if (checkpoint_.empty() || !services_ || !doc_ || trace_job_ ||
       trace_frame() >= doc_->scene.num_frames()) {
@@ -479,11 +481,14 @@ void ViewerState::update_jobs() {
   }
   ModelServices* services = services_;
   std::shared_ptr<ModelCache> cache = cache_;
-  trace_job_ = std::make_unique<BackgroundJob<ModelTrace>>(
+  trace_job_ = std::make_unique<BackgroundJob<TraceJobResult>>(
       "trace", ticket(), 1, [services, cache, request = std::move(request)](JobControl& control) {
         const std::shared_ptr<LoadedCheckpoint> model = cache->get(request.checkpoint);
         control.check();
-        return services->trace(*model, request, control);
+        TraceJobResult result{services->trace(*model, request, control), nullptr};
+        control.check();
+        result.truth_levels = truth_levels_of(result.trace, request.rollout.get());
+        return result;
       });
 }
 

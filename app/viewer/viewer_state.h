@@ -54,6 +54,12 @@ struct Selection {
 /// (the pass that produced the next predicted frame) or the scene's ground truth at that frame.
 enum class TraceInput { kPrediction, kTruth };
 
+/// For a trace that read `rollout`'s predicted frames (a rollout-state trace): the hierarchy the
+/// same model builds from the rollout's ground truth at the trace's frame, to compare the neighbour
+/// lists with; null for any other trace or without a rollout. Runs the model's hierarchy
+/// building (no forward pass): the viewer calls it off the UI thread, inside the trace job.
+std::shared_ptr<const ModelTrace> truth_levels_of(const ModelTrace& trace, const Rollout* rollout);
+
 /// Playback state of the timeline.
 struct Timeline {
   bool playing = false;
@@ -282,7 +288,10 @@ class ViewerState {
 
  private:
   void replaced();
-  void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked);
+  /// Shows `trace` at `level` with `picked`'s filter weights; `truth_levels` is its
+  /// truth_input_levels() (null unless it reads a rollout's prediction).
+  void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked,
+                     std::shared_ptr<const ModelTrace> truth_levels);
   /// Without a checkpoint or trace file: installs the level view of the current frame when the
   /// view needs the model's hierarchy (or it was requested).
   void ensure_level_view();
@@ -326,9 +335,15 @@ class ViewerState {
   };
   RolloutJobInput rollout_input_;
   std::unique_ptr<BackgroundJob<std::vector<Rollout>>> rollout_job_;
-  std::unique_ptr<BackgroundJob<ModelTrace>> trace_job_;
+  /// A trace job's result: the trace and, for a rollout-state trace, the hierarchy of the same
+  /// frame's ground truth, both built off the UI thread.
+  struct TraceJobResult {
+    ModelTrace trace;
+    std::shared_ptr<const ModelTrace> truth_levels;
+  };
+  std::unique_ptr<BackgroundJob<TraceJobResult>> trace_job_;
   std::vector<std::unique_ptr<BackgroundJob<std::vector<Rollout>>>> retired_rollouts_;
-  std::vector<std::unique_ptr<BackgroundJob<ModelTrace>>> retired_traces_;
+  std::vector<std::unique_ptr<BackgroundJob<TraceJobResult>>> retired_traces_;
   std::unique_ptr<BackgroundJob<RolloutExplanation>> explain_job_;
   std::vector<std::unique_ptr<BackgroundJob<RolloutExplanation>>> retired_explains_;
   std::unique_ptr<const RolloutExplanation> explanation_;

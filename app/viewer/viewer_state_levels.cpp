@@ -49,7 +49,21 @@ std::vector<LevelCount> ViewerState::level_counts() const {
   return {};
 }
 
-void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked) {
+std::shared_ptr<const ModelTrace> truth_levels_of(const ModelTrace& trace, const Rollout* rollout) {
+  if (trace.source != kTraceSourceRollout || !rollout || trace.frame < 0 ||
+      trace.frame >= rollout->num_frames()) {
+    return nullptr;
+  }
+  // The same model's hierarchy on the ground truth of the frame, to compare the lists with.
+  const ModelConfig config = ModelConfig::from_json(trace.model_config, "trace");
+  const Points& truth = rollout->truth[static_cast<size_t>(trace.frame)];
+  return std::make_shared<const ModelTrace>(
+      hierarchy_trace(build_model_hierarchy(truth, rollout->object_ids, rollout->faces, config),
+                      rollout->faces, trace.frame, config));
+}
+
+void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked,
+                                std::shared_ptr<const ModelTrace> truth_levels) {
   render::ViewSpec build = view_;
   build.level = level;
   build.layers.level_points = true;
@@ -57,17 +71,7 @@ void ViewerState::install_trace(std::shared_ptr<const ModelTrace> trace, int lev
   build.picked_point = -1;
   build.frame = trace->frame;
   trace_data_ = std::make_unique<render::SceneRenderData>(doc_->scene, build, trace);
-  truth_levels_.reset();
-  if (trace->source == kTraceSourceRollout && rollout_ &&
-      trace->frame < rollout_->rollout.num_frames()) {
-    // The same model's hierarchy on the ground truth of the frame, to compare the lists with.
-    const Rollout& r = rollout_->rollout;
-    const ModelConfig config = ModelConfig::from_json(trace->model_config, "trace");
-    const Points& truth = r.truth[static_cast<size_t>(trace->frame)];
-    truth_levels_ = std::make_shared<const ModelTrace>(
-        hierarchy_trace(build_model_hierarchy(truth, r.object_ids, r.faces, config), r.faces,
-                        trace->frame, config));
-  }
+  truth_levels_ = std::move(truth_levels);
   trace_ = std::move(trace);
   trace_level_ = level;
   trace_picked_ = picked;
@@ -138,7 +142,7 @@ void ViewerState::ensure_level_view() {
     throw;
   }
   if (trace_ == levels && trace_level_ == view_.level) return;
-  install_trace(levels, view_.level, -1);
+  install_trace(levels, view_.level, -1, nullptr);
   if (other_points || view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
 }
 
