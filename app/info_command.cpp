@@ -1,6 +1,7 @@
 // `dynscope info FILE | --system`: describe a scene, mesh, rollout, trace or checkpoint, or the
 // machine and process (BLAS, threads, LibTorch, GL).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -18,6 +19,7 @@
 #include "engine/io/trace_file.h"
 #include "engine/model/checkpoint_info.h"
 #include "engine/model/torch_runtime.h"
+#include "engine/rollout/level_view.h"
 #include "engine/rollout/model_points.h"
 #include "render/context_factory.h"
 
@@ -39,6 +41,36 @@ nlohmann::json aabb_json(const Aabb& box) {
           {"max", {box.max.x(), box.max.y(), box.max.z()}}};
 }
 
+// The fastest motion in a scene: per object, the largest distance any of its sampled points
+// moves between two consecutive frames, and where the fastest of all happens.
+struct SceneMotion {
+  std::vector<double> max_step;  // per object index
+  double fastest = 0.0;
+  int fastest_object = -1, fastest_frame = -1;  // frame f: the step from f to f + 1
+};
+
+SceneMotion scene_motion(const Scene& scene, const ScenePointCloud& cloud) {
+  SceneMotion m;
+  m.max_step.assign(scene.objects.size(), 0.0);
+  if (scene.num_frames() < 2 || cloud.size() == 0) return m;
+  Points previous = cloud.positions(scene, 0);
+  for (int f = 1; f < scene.num_frames(); ++f) {
+    Points current = cloud.positions(scene, f);
+    const Eigen::VectorXd step = (current - previous).rowwise().norm();
+    for (Eigen::Index i = 0; i < step.size(); ++i) {
+      const auto o = static_cast<size_t>(cloud.object[static_cast<size_t>(i)]);
+      m.max_step[o] = std::max(m.max_step[o], step[i]);
+      if (step[i] > m.fastest) {
+        m.fastest = step[i];
+        m.fastest_object = static_cast<int>(o);
+        m.fastest_frame = f - 1;
+      }
+    }
+    previous = std::move(current);
+  }
+  return m;
+}
+
 void print_scene(const std::string& path, const Scene& scene, const InfoOptions& opt) {
   const double voxel = opt.voxel > 0 ? opt.voxel : default_sampling_voxel(scene.scenario);
   PointCloudOptions pc_opt;
@@ -47,6 +79,10 @@ void print_scene(const std::string& path, const Scene& scene, const InfoOptions&
   pc_opt.seed = opt.seed;
   const ScenePointCloud cloud = build_point_cloud(scene, pc_opt);
   const int frames = scene.num_frames();
+  const SceneMotion motion = scene_motion(scene, cloud);
+  // The level-0 relational radius of the model preset for this scenario: a point that moves
+  // farther than it in one frame can pass another object between two of the model's looks.
+  const double radius = level_view_config(scene).radius;
 
   if (opt.json) {
     nlohmann::json j;
@@ -75,8 +111,13 @@ void print_scene(const std::string& path, const Scene& scene, const InfoOptions&
            {"restitution", o.restitution},
            {"bounds_frame0", frames > 0 ? aabb_json(Aabb::of(scene.world_vertices(idx, 0)))
                                         : nlohmann::json(nullptr)},
-           {"points", cloud.count_of(idx)}});
+           {"points", cloud.count_of(idx)},
+           {"max_step", motion.max_step[i]}});
     }
+    j["motion"] = {{"fastest_step", motion.fastest},
+                   {"fastest_object", motion.fastest_object},
+                   {"fastest_frame", motion.fastest_frame},
+                   {"model_radius", radius}};
     for (const auto& [name, values] : scene.labels) {
       int positive = 0;
       for (double v : values) positive += v > 0.5 ? 1 : 0;
@@ -93,22 +134,31 @@ void print_scene(const std::string& path, const Scene& scene, const InfoOptions&
               1.0 / scene.dt_s, frames > 0 ? (frames - 1) * scene.dt_s : 0.0);
   std::printf("  bounds     %s\n", format_aabb(scene.bounds()).c_str());
   std::printf("  objects    %zu\n", scene.objects.size());
-  std::printf("  %4s %-16s %-6s %-5s %7s %7s %7s %7s %7s  %-48s %7s\n", "id", "name", "role",
-              "rigid", "verts", "faces", "mass", "fric", "rest", "bounds at frame 0", "points");
+  std::printf("  %4s %-16s %-6s %-5s %7s %7s %7s %7s %7s  %-48s %7s %8s\n", "id", "name", "role",
+              "rigid", "verts", "faces", "mass", "fric", "rest", "bounds at frame 0", "points",
+              "max step");
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const Object& o = scene.objects[i];
     const int idx = static_cast<int>(i);
     const std::string box = frames > 0 ? format_aabb(Aabb::of(scene.world_vertices(idx, 0))) : "-";
-    std::printf("  %4d %-16s %-6s %-5s %7ld %7ld %7.3f %7.3f %7.3f  %-48s %7lld\n", o.id,
+    std::printf("  %4d %-16s %-6s %-5s %7ld %7ld %7.3f %7.3f %7.3f  %-48s %7lld %8.4f\n", o.id,
                 o.name.c_str(), role_name(o.role), o.rigid ? "yes" : "no",
                 static_cast<long>(o.mesh.num_vertices()), static_cast<long>(o.mesh.num_faces()),
                 o.mass, o.friction, o.restitution, box.c_str(),
-                static_cast<long long>(cloud.count_of(idx)));
+                static_cast<long long>(cloud.count_of(idx)), motion.max_step[i]);
   }
   std::printf(
       "  points     %lld after surface sampling (%.1f samples per voxel area) and grid "
       "downsampling at voxel %.4g\n",
       static_cast<long long>(cloud.size()), opt.oversample, voxel);
+  if (motion.fastest_object >= 0) {
+    std::printf(
+        "  motion     fastest point moves %.4g per frame (%s, frames %d-%d); the level-0 "
+        "relational radius of the scenario's model preset is %.4g (%.2fx that step)\n",
+        motion.fastest, scene.objects[static_cast<size_t>(motion.fastest_object)].name.c_str(),
+        motion.fastest_frame, motion.fastest_frame + 1, radius,
+        motion.fastest > 0 ? radius / motion.fastest : 0.0);
+  }
   for (const auto& [name, values] : scene.labels) {
     int positive = 0, first = -1;
     for (size_t f = 0; f < values.size(); ++f) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -130,6 +131,22 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
         EXPECT_NE(s, 1.0) << key << " is the untrained default";
       }
     }
+  }
+  {
+    // A scene's description says how fast its points move against the model's radius.
+    const test::CommandResult r = test::run_dynscope("info --json " + scene);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = nlohmann::json::parse(r.output);
+    const double fastest = j.at("motion").at("fastest_step");
+    EXPECT_GT(fastest, 0.0) << "the probe moves";
+    EXPECT_GT(j.at("motion").at("model_radius").get<double>(), 0.0);
+    double largest = 0.0;
+    for (const nlohmann::json& o : j.at("objects")) {
+      largest = std::max(largest, o.at("max_step").get<double>());
+    }
+    EXPECT_EQ(largest, fastest);
+    const int object = j.at("motion").at("fastest_object");
+    EXPECT_EQ(j.at("objects").at(object).at("max_step").get<double>(), fastest);
   }
   // Bad input: one clear line, non-zero exit.
   EXPECT_NE(run("eval --checkpoint " + ckpt + " --data " + data + " --split training"), 0);
