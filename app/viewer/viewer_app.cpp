@@ -132,7 +132,7 @@ void ViewerApp::frame() {
     state_.update_jobs();
     handle_input();
     state_.advance_playback(ImGui::GetIO().DeltaTime);
-    state_.ensure_render_data();
+    state_.ensure_render_data(/*in_background=*/true);
   } catch (const std::exception& e) {
     report(e);
   }

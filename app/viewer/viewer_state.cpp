@@ -67,6 +67,10 @@ void ViewerState::cancel_jobs() {
     explain_job_->cancel();
     retired_explains_.push_back(std::move(explain_job_));
   }
+  if (level_job_) {
+    level_job_->cancel();
+    retired_levels_.push_back(std::move(level_job_));
+  }
   rollout_input_ = RolloutJobInput{};
 }
 
@@ -84,6 +88,7 @@ void ViewerState::reap_retired() {
   reap(retired_rollouts_);
   reap(retired_traces_);
   reap(retired_explains_);
+  reap(retired_levels_);
 }
 
 const SceneDocument& ViewerState::document() const {
@@ -145,7 +150,7 @@ void ViewerState::set_frame(int frame) {
   // Level points of a model trace are the hierarchy of one frame; only level-0 points (the
   // model's points) keep their index from frame to frame.
   if (trace_frame() != traced && view_.level > 0 && !trace_from_file_) view_.picked_point = -1;
-  ensure_level_view();
+  ensure_level_view(/*in_background=*/true);
 }
 
 void ViewerState::select_point(int point) {
@@ -164,7 +169,7 @@ void ViewerState::select_point(int point) {
   drawn_pick_ = Selection{};
   selection_marker_.reset();
   view_.picked_point = std::max(point, -1);
-  ensure_level_view();
+  ensure_level_view(/*in_background=*/false);
 }
 
 void ViewerState::select(PickSet set, int point) {
@@ -458,6 +463,7 @@ void ViewerState::update_jobs() {
     }
   }
   update_explain_job();
+  take_level_job();
   if (trace_from_file_ && trace_ && trace_level_ != view_.level &&
       view_.level < static_cast<int>(trace_->levels.size())) {
     install_trace(trace_, view_.level, -1, truth_levels_);

@@ -176,7 +176,8 @@ class ViewerState {
   /// True while a rollout, trace or explanation runs in the background (cancelled ones not
   /// counted).
   bool busy() const {
-    return rollout_job_ != nullptr || trace_job_ != nullptr || explain_job_ != nullptr;
+    return rollout_job_ != nullptr || trace_job_ != nullptr || explain_job_ != nullptr ||
+           level_job_ != nullptr;
   }
   /// The running rollout job or null (label, progress).
   const BackgroundJob<std::vector<Rollout>>* rollout_job() const { return rollout_job_.get(); }
@@ -186,7 +187,8 @@ class ViewerState {
   int dropped_results() const { return dropped_; }
   /// Cancelled jobs whose thread has not finished yet.
   size_t retiring_jobs() const {
-    return retired_rollouts_.size() + retired_traces_.size() + retired_explains_.size();
+    return retired_rollouts_.size() + retired_traces_.size() + retired_explains_.size() +
+           retired_levels_.size();
   }
   /// The models loaded for jobs, or null without services.
   const ModelCache* model_cache() const { return cache_.get(); }
@@ -222,8 +224,12 @@ class ViewerState {
   /// The level data panels and picking read: built from the shown trace, else the scene's
   /// preview levels; null without a scene.
   const render::SceneRenderData* active_data() const;
-  /// Rebuilds the scene's level data when the level changed.
-  void ensure_render_data();
+  /// Rebuilds the scene's level data when the level changed, and without a checkpoint installs
+  /// the model's level view the view needs. `in_background`: a level view not built yet for the
+  /// current frame is built by a background job (the frame loop and scrubbing: the UI thread
+  /// never builds a hierarchy per frame) and installed by a later call once done; otherwise it
+  /// is built now (one-off actions that read it at once: picking, a level change, a view).
+  void ensure_render_data(bool in_background = false);
   const render::ViewSpec& view() const { return view_; }
   /// Layers drawn in the 3D view (same meaning as in a view spec).
   render::ViewLayers& layers() { return view_.layers; }
@@ -293,8 +299,11 @@ class ViewerState {
   void install_trace(std::shared_ptr<const ModelTrace> trace, int level, int picked,
                      std::shared_ptr<const ModelTrace> truth_levels);
   /// Without a checkpoint or trace file: installs the level view of the current frame when the
-  /// view needs the model's hierarchy (or it was requested).
-  void ensure_level_view();
+  /// view needs the model's hierarchy (or it was requested); see ensure_render_data.
+  void ensure_level_view(bool in_background);
+  /// Takes a finished level-view job: drops it if stale, rethrows its error (once); its view is
+  /// then kept by the document's LevelViews for ensure_level_view to install.
+  void take_level_job();
   void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
                          std::optional<Scene> what_if_scene);
   void reap_retired();
@@ -344,6 +353,9 @@ class ViewerState {
   std::unique_ptr<BackgroundJob<TraceJobResult>> trace_job_;
   std::vector<std::unique_ptr<BackgroundJob<std::vector<Rollout>>>> retired_rollouts_;
   std::vector<std::unique_ptr<BackgroundJob<TraceJobResult>>> retired_traces_;
+  std::unique_ptr<BackgroundJob<std::shared_ptr<const ModelTrace>>> level_job_;
+  int level_job_frame_ = -1;  ///< Frame level_job_ builds.
+  std::vector<std::unique_ptr<BackgroundJob<std::shared_ptr<const ModelTrace>>>> retired_levels_;
   std::unique_ptr<BackgroundJob<RolloutExplanation>> explain_job_;
   std::vector<std::unique_ptr<BackgroundJob<RolloutExplanation>>> retired_explains_;
   std::unique_ptr<const RolloutExplanation> explanation_;

@@ -94,7 +94,7 @@ const render::SceneRenderData* ViewerState::active_data() const {
   return doc_ ? doc_->data.get() : nullptr;
 }
 
-void ViewerState::ensure_render_data() {
+void ViewerState::ensure_render_data(bool in_background) {
   if (doc_ && (!doc_->data || data_stale_)) {
     render::ViewSpec build = view_;
     build.layers.level_points = true;  // points are always prepared so they can be picked
@@ -104,6 +104,10 @@ void ViewerState::ensure_render_data() {
     doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
     // The sampling voxel may have changed: level views are drawn anew.
     doc_->levels.reset();
+    if (level_job_) {
+      level_job_->cancel();
+      retired_levels_.push_back(std::move(level_job_));
+    }
     if (trace_ && is_level_view(*trace_)) {
       trace_.reset();
       trace_data_.reset();
@@ -111,39 +115,71 @@ void ViewerState::ensure_render_data() {
     level_view_failed_ = -1;
   }
   data_stale_ = false;
-  ensure_level_view();
+  ensure_level_view(in_background);
 }
 
-void ViewerState::ensure_level_view() {
-  const bool wanted = level_view_wanted_;
-  level_view_wanted_ = false;
+void ViewerState::take_level_job() {
+  if (!level_job_ || !level_job_->done()) return;
+  const std::unique_ptr<BackgroundJob<std::shared_ptr<const ModelTrace>>> job =
+      std::move(level_job_);
+  if (job->ticket() != ticket() || job->cancelled() || !doc_) {
+    ++dropped_;
+    return;
+  }
+  try {
+    job->take();  // the view is now the one doc_->levels keeps
+  } catch (...) {
+    level_view_failed_ = level_job_frame_;
+    view_.layers.interaction_points = false;
+    throw;
+  }
+}
+
+void ViewerState::ensure_level_view(bool in_background) {
+  take_level_job();
   if (!doc_ || !checkpoint_.empty() || trace_from_file_ ||
       view_.frame >= doc_->scene.num_frames()) {
     return;
   }
-  if (!wanted && view_.picked_point < 0 && !render::view_needs_levels(view_)) return;
+  if (!level_view_wanted_ && view_.picked_point < 0 && !render::view_needs_levels(view_)) return;
   const ModelConfig config = render::level_view_config(doc_->scene, view_);
   if (level_view_failed_ == view_.frame &&
       (!doc_->levels || doc_->levels->config().input == config.input)) {
     return;
   }
   std::shared_ptr<const ModelTrace> levels;
-  bool other_points = false;  // points of another input (mesh vertices vs samples)
   try {
     if (!doc_->levels || doc_->levels->config().input != config.input) {
-      other_points = doc_->levels != nullptr;
+      // Points of another input (mesh vertices vs samples): a selection means nothing there.
+      if (doc_->levels) view_.picked_point = -1;
+      if (level_job_) {
+        level_job_->cancel();
+        retired_levels_.push_back(std::move(level_job_));
+      }
       doc_->levels = render::make_level_views(doc_->scene, view_);
     }
-    levels = doc_->levels->at(view_.frame);
+    levels = doc_->levels->cached(view_.frame);
+    if (!levels && in_background) {
+      // One job at a time: while scrubbing, the next frame's starts when this one is taken.
+      if (!level_job_) {
+        level_job_frame_ = view_.frame;
+        level_job_ = std::make_unique<BackgroundJob<std::shared_ptr<const ModelTrace>>>(
+            "level view", ticket(), 1,
+            [views = doc_->levels, frame = view_.frame](JobControl&) { return views->at(frame); });
+      }
+      return;
+    }
+    if (!levels) levels = doc_->levels->at(view_.frame);
   } catch (...) {
     level_view_failed_ = view_.frame;
     // Mesh input fails on a scene it cannot read (deformable objects): the layer goes off.
     view_.layers.interaction_points = false;
     throw;
   }
+  level_view_wanted_ = false;
   if (trace_ == levels && trace_level_ == view_.level) return;
   install_trace(levels, view_.level, -1, nullptr);
-  if (other_points || view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
+  if (view_.picked_point >= trace_data_->level_size()) view_.picked_point = -1;
 }
 
 }  // namespace dynscope::app::viewer

@@ -86,4 +86,9 @@ std::shared_ptr<const ModelTrace> LevelViews::at(int frame) {
   return last_;
 }
 
+std::shared_ptr<const ModelTrace> LevelViews::cached(int frame) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return last_ && last_->frame == frame ? last_ : nullptr;
+}
+
 }  // namespace dynscope

@@ -43,6 +43,8 @@ class LevelViews {
 
   /// The level view at `frame` (throws ValueError for a frame outside the scene).
   std::shared_ptr<const ModelTrace> at(int frame);
+  /// The level view at `frame` if it is the one kept (no building), else null.
+  std::shared_ptr<const ModelTrace> cached(int frame);
 
   const ModelConfig& config() const { return config_; }
   const ModelPoints& points() const { return points_; }

@@ -277,6 +277,56 @@ TEST(ViewerState, LevelsAndObservedFramesComeFromTheEngine) {
   EXPECT_EQ(s.observed_frames(), 5);
 }
 
+// Without a checkpoint the levels are the model's level view of the frame. Scrubbing never builds
+// one on the UI thread: a background job does, and its result is installed by a later frame;
+// one-off actions (a level change, a pick) build what they read at once.
+TEST(ViewerState, ScrubbingBuildsLevelViewsInTheBackground) {
+  ViewerState s;
+  s.open_scene(testing::collide_scene());
+  s.set_level(1);
+  ASSERT_NE(s.shown_trace(), nullptr) << "a level change reads its level at once";
+  EXPECT_EQ(s.shown_trace()->frame, 0);
+  s.set_frame(12);
+  EXPECT_EQ(s.shown_trace(), nullptr) << "frame 12's hierarchy was built on the UI thread";
+  EXPECT_TRUE(s.busy());
+  settle(s);
+  s.ensure_render_data(/*in_background=*/true);
+  ASSERT_NE(s.shown_trace(), nullptr);
+  EXPECT_EQ(s.shown_trace()->frame, 12);
+  EXPECT_FALSE(s.busy());
+  // The same hierarchy the engine builds for that frame.
+  LevelViews direct(s.document().scene, level_view_config(s.document().scene));
+  const std::shared_ptr<const ModelTrace> expected = direct.at(12);
+  ASSERT_EQ(s.shown_trace()->levels.size(), expected->levels.size());
+  EXPECT_EQ(s.shown_trace()->levels[1].points, expected->levels[1].points);
+
+  // A pick right after scrubbing reads the new frame's level at once.
+  s.set_frame(15);
+  s.select_point(3);
+  ASSERT_NE(s.shown_trace(), nullptr);
+  EXPECT_EQ(s.shown_trace()->frame, 15);
+  EXPECT_EQ(s.selected_point(), 3);
+
+  // A level-view job still running (or not yet taken) when another scene opens is dropped.
+  s.set_frame(20);
+  ASSERT_TRUE(s.busy());
+  const int dropped = s.dropped_results();
+  s.open_scene(other_scene());
+  settle(s);
+  EXPECT_EQ(s.dropped_results(), dropped + 1);
+  s.ensure_render_data(/*in_background=*/true);
+  settle(s);
+  s.ensure_render_data(/*in_background=*/true);
+  ASSERT_NE(s.shown_trace(), nullptr);
+  EXPECT_EQ(s.shown_trace()->frame, 0);
+  EXPECT_EQ(s.shown_trace()->levels[0].points.rows(),
+            LevelViews(s.document().scene, level_view_config(s.document().scene))
+                .at(0)
+                ->levels[0]
+                .points.rows())
+      << "the new scene's levels, not the old one's";
+}
+
 TEST(ViewerState, AMeshFileSaysWhatItIsAndKeepsTheScene) {
   ViewerState s;
   s.open_scene(testing::collide_scene());
