@@ -4,12 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "engine/core/error.h"
 
@@ -36,60 +34,6 @@ std::string fmt(const char* format, double a, double b = 0.0) {
 }
 
 }  // namespace
-
-EvalSummary read_eval_json(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError(path, "cannot open evaluation file");
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text.str());
-  } catch (const nlohmann::json::parse_error& e) {
-    throw FormatError(path, "json",
-                      "not a JSON file (parse error at byte " + std::to_string(e.byte) +
-                          "); expected what `dynscope eval --json` writes");
-  }
-  const char* field = "split";
-  try {
-    DatasetSplit split;
-    split.dir = j.at("dir").get<std::string>();
-    split.split = j.at("split").get<std::string>();
-    EvalOptions options;
-    field = "observed_frames";
-    options.observed_frames = j.at("observed_frames").get<int>();
-    field = "sampling_voxel";
-    const double voxel = j.at("sampling_voxel").get<double>();
-    field = "contact_threshold";
-    const double threshold = j.at("contact_threshold").get<double>();
-    field = "scenes";
-    std::vector<SceneEvaluation> scenes;
-    for (const nlohmann::json& s : j.at("scenes")) {
-      SceneEvaluation e;
-      e.file = s.at("file").get<std::string>();
-      e.scenario = s.at("scenario").get<std::string>();
-      e.frames = s.at("frames").get<int>();
-      e.label = s.at("label").get<int>();
-      e.model_curve = s.at("error_curve").get<std::vector<double>>();
-      e.baseline_curve = s.at("baseline_error_curve").get<std::vector<double>>();
-      if (e.model_curve.empty()) throw FormatError(path, "scenes", e.file + " has no error curve");
-      e.has_contact = s.contains("contact");
-      if (e.has_contact) {
-        e.model_contact = s.at("contact").get<bool>();
-        e.truth_contact = s.at("truth_contact").get<bool>();
-        e.baseline_contact = s.at("baseline_contact").get<bool>();
-        e.model_min_distance = s.at("min_distance").get<double>();
-        e.truth_min_distance = s.at("truth_min_distance").get<double>();
-        e.baseline_min_distance = s.at("baseline_min_distance").get<double>();
-      }
-      scenes.push_back(std::move(e));
-    }
-    if (scenes.empty()) throw FormatError(path, "scenes", "the evaluation has no scene");
-    return summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
-  } catch (const nlohmann::json::exception& e) {
-    throw FormatError(path, field, std::string("missing or malformed (") + e.what() + ")");
-  }
-}
 
 EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
   if (runs.empty()) throw ValueError("runs", "nothing to compare");

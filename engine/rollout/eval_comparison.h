@@ -11,11 +11,6 @@
 
 namespace dynscope {
 
-/// Reads an evaluation written by eval_to_json (`dynscope eval --json`) back: every scene's
-/// curves and contact outcomes, and the per-scenario summary recomputed from them. Throws
-/// IoError if the file cannot be read, FormatError naming the field for anything malformed.
-EvalSummary read_eval_json(const std::string& path);
-
 /// One run: the evaluations of its seeds (same split, same scenes), under a label.
 struct RunEvaluations {
   std::string label;

@@ -66,8 +66,7 @@ struct EvalSummary {
 /// The physics-free floor of every comparison: constant velocity plus the scenario's gravity,
 /// Kabsch-rigidified, clamped at the floor z = 0, rolled out like a model (`options` as given,
 /// floor clamp forced on).
-Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
-                             RolloutOptions options);
+Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points, RolloutOptions options);
 /// One line naming the baseline, for tables and JSON.
 extern const char* const kBaselineDescription;
 
@@ -95,6 +94,10 @@ SceneEvaluation scene_evaluation_from_json(const std::string& text);
 
 /// The summary as indented JSON (every number, per scene and per scenario).
 std::string eval_to_json(const EvalSummary& summary);
+/// Reads a file eval_to_json wrote (`dynscope eval --json`) back: every scene's curves and
+/// contact outcomes, and the per-scenario summary recomputed from them. Throws IoError if the
+/// file cannot be read, FormatError naming the field for anything malformed.
+EvalSummary read_eval_json(const std::string& path);
 
 /// A plain-text table of the per-scenario summary.
 std::string eval_table(const EvalSummary& summary);
