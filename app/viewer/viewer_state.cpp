@@ -67,10 +67,7 @@ void ViewerState::cancel_jobs() {
     explain_job_->cancel();
     retired_explains_.push_back(std::move(explain_job_));
   }
-  if (level_job_) {
-    level_job_->cancel();
-    retired_levels_.push_back(std::move(level_job_));
-  }
+  retire_level_job();
   rollout_input_ = RolloutJobInput{};
 }
 

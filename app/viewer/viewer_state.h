@@ -304,6 +304,8 @@ class ViewerState {
   /// Takes a finished level-view job: drops it if stale, rethrows its error (once); its view is
   /// then kept by the document's LevelViews for ensure_level_view to install.
   void take_level_job();
+  /// Cancels the level-view job (its thread is reaped later; its result is never installed).
+  void retire_level_job();
   void start_rollout_job(const std::string& label, std::vector<RolloutRequest> requests,
                          std::optional<Scene> what_if_scene);
   void reap_retired();

@@ -104,10 +104,7 @@ void ViewerState::ensure_render_data(bool in_background) {
     doc_->data = std::make_unique<render::SceneRenderData>(doc_->scene, build);
     // The sampling voxel may have changed: level views are drawn anew.
     doc_->levels.reset();
-    if (level_job_) {
-      level_job_->cancel();
-      retired_levels_.push_back(std::move(level_job_));
-    }
+    retire_level_job();
     if (trace_ && is_level_view(*trace_)) {
       trace_.reset();
       trace_data_.reset();
@@ -116,6 +113,12 @@ void ViewerState::ensure_render_data(bool in_background) {
   }
   data_stale_ = false;
   ensure_level_view(in_background);
+}
+
+void ViewerState::retire_level_job() {
+  if (!level_job_) return;
+  level_job_->cancel();
+  retired_levels_.push_back(std::move(level_job_));
 }
 
 void ViewerState::take_level_job() {
@@ -152,10 +155,7 @@ void ViewerState::ensure_level_view(bool in_background) {
     if (!doc_->levels || doc_->levels->config().input != config.input) {
       // Points of another input (mesh vertices vs samples): a selection means nothing there.
       if (doc_->levels) view_.picked_point = -1;
-      if (level_job_) {
-        level_job_->cancel();
-        retired_levels_.push_back(std::move(level_job_));
-      }
+      retire_level_job();
       doc_->levels = render::make_level_views(doc_->scene, view_);
     }
     levels = doc_->levels->cached(view_.frame);

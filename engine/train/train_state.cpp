@@ -66,6 +66,7 @@ RunProgress load_train_state(const std::string& path, torch::optim::Adam& optimi
   optimizer.load(archive);
   RunProgress p;
   p.step = step.toInt();
+  // Fields a state may lack (written before they were recorded) keep RunProgress's defaults.
   c10::IValue value;
   if (archive.try_read("wall_seconds", value)) p.wall_seconds = value.toDouble();
   if (archive.try_read("chunks", value)) p.chunks = value.toInt();
