@@ -10,6 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
+source assets/recipes/movi-a-3k/progress.sh
 split=${1:-test}
 runs=assets/runs/movi-a-3k
 out=out/campaign
@@ -23,10 +24,8 @@ for variant in "${variants[@]}"; do
     name=$(basename "$recipe" .json)
     ckpt=$runs/$name.pt
     [ -f "$ckpt.recipe.json" ] || continue
-    done_steps=$(sed -n 's/^ *"steps": \([0-9]*\).*/\1/p' "$ckpt.recipe.json" | head -1)
-    total_steps=$(sed -n 's/^ *"total_steps": \([0-9]*\).*/\1/p' "$ckpt.recipe.json" | head -1)
-    if [ -z "$done_steps" ] || [ "$done_steps" != "$total_steps" ]; then
-      echo "$name: still training ($done_steps of $total_steps steps), skipped"
+    if ! run_finished "$ckpt"; then
+      echo "$name: still training ($(run_progress "$ckpt" | sed 's/ / of /') steps), skipped"
       continue
     fi
     best=$runs/$name.best.pt

@@ -8,6 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
+source assets/recipes/movi-a-3k/progress.sh
 recipes=("$@")
 [ ${#recipes[@]} -eq 0 ] && recipes=(assets/recipes/movi-a-3k/*_s[0-9].json)
 mkdir -p assets/runs/movi-a-3k
@@ -15,14 +16,9 @@ for recipe in "${recipes[@]}"; do
   name=$(basename "$recipe" .json)
   ckpt=assets/runs/movi-a-3k/$name.pt
   resume=()
-  if [ -f "$ckpt.recipe.json" ]; then
-    # The recipe beside the checkpoint records "steps" done and "total_steps" planned.
-    done_steps=$(sed -n 's/^ *"steps": \([0-9]*\).*/\1/p' "$ckpt.recipe.json" | head -1)
-    total_steps=$(sed -n 's/^ *"total_steps": \([0-9]*\).*/\1/p' "$ckpt.recipe.json" | head -1)
-    if [ -n "$done_steps" ] && [ "$done_steps" = "$total_steps" ]; then
-      echo "$name: finished ($done_steps steps)"
-      continue
-    fi
+  if run_finished "$ckpt"; then
+    echo "$name: finished ($(run_progress "$ckpt" | cut -d' ' -f1) steps)"
+    continue
   fi
   [ -f "$ckpt.state" ] && resume=(--resume)
   if [ ${#resume[@]} -gt 0 ]; then echo "$name: continuing"; else echo "$name: starting"; fi
