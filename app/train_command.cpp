@@ -32,7 +32,7 @@ struct TrainArgs {
   int epochs = 0, samples = 0, batch = 0, threads = 0, checkpoint_every = 0, width = 0, levels = 0,
       bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0;
   int64_t max_steps = 0;
-  double lr = 0, noise_std = -1, voxel = 0, radius = 0, sample_voxel = 0;
+  double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
   bool resume = false;
   DistributedArgs dist;
@@ -70,6 +70,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--lr")) o.lr = a.lr;
   if (given(a, "--lr-schedule")) o.lr_schedule = a.lr_schedule;
   if (given(a, "--noise-std")) o.noise_std = a.noise_std;
+  if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
   if (given(a, "--levels")) o.model.levels = a.levels;
@@ -221,6 +222,9 @@ void add_train_command(CLI::App& app) {
   cmd->add_option(
       "--noise-std", a->noise_std,
       "Random-walk noise std on input velocities, scene units per frame (default 3e-4)");
+  cmd->add_option("--huber-delta", a->huber_delta,
+                  "Huber loss transition in target-std units (default 1; 1000 makes it a squared "
+                  "error for any realistic error, as the paper's loss in scene units is)");
   cmd->add_option("--threads", a->threads, "LibTorch threads (0: default)");
   cmd->add_flag("--resume", a->resume, "Continue from --out and its .state file exactly");
   cmd->add_option("--log", a->log, "CSV log, one row per step");

@@ -38,10 +38,16 @@ TEST(CliEndToEndTest, GenerateTrainRolloutEvalTrace) {
   ASSERT_EQ(run("generate --scenario collide --count 10 --seed 1 --out " + data), 0);
   ASSERT_EQ(run("train --data " + data + " --model pointconv --target acc --out " + ckpt +
                 " --max-steps 3 --width 8 --levels 2 --bottleneck-blocks 1 --k 6 --c-mid 4"
-                " --sample-voxel 0.1 --val-scenes 1 --val-frames 5 --threads 2 --log " +
+                " --sample-voxel 0.1 --val-scenes 1 --val-frames 5 --threads 2 --huber-delta 1000"
+                " --log " +
                 (dir / "log.csv").string()),
             0);
   EXPECT_TRUE(fs::exists(dir / "log.csv"));
+  {
+    std::ifstream recipe(ckpt + ".recipe.json");
+    EXPECT_EQ(nlohmann::json::parse(recipe).at("huber_delta").get<double>(), 1000.0)
+        << "the resolved recipe records the loss it trained with";
+  }
   const std::string scene = (fs::path(data) / "collide_0009.h5").string();
   const std::string rollout = (dir / "rollout.h5").string();
   ASSERT_EQ(run("rollout --checkpoint " + ckpt + " --scene " + scene + " --out " + rollout), 0);
