@@ -4,10 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -18,6 +16,7 @@
 #include "engine/core/error.h"
 #include "engine/core/log.h"
 #include "engine/core/threads.h"
+#include "engine/io/temp_file.h"
 #include "engine/train/process_group.h"
 #include "engine/train/trainer.h"
 
@@ -45,10 +44,7 @@ TrainOptions build_options(const TrainArgs& a) {
   TrainOptions o;
   if (!a.recipe.empty()) {
     require_readable_file(a.recipe);
-    std::ifstream in(a.recipe);
-    std::stringstream text;
-    text << in.rdbuf();
-    o = TrainOptions::from_json(text.str(), a.recipe);
+    o = TrainOptions::from_json(read_text_file(a.recipe), a.recipe);
   }
   if (given(a, "--data")) o.data_dirs = a.data;
   if (given(a, "--out")) o.out = a.out;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <vector>
 
 #include "engine/core/error.h"
@@ -50,6 +51,14 @@ void write_text_file_atomically(const std::string& path, const std::string& text
     if (!out) throw IoError(path, "cannot write");
   }
   temp.commit();
+}
+
+std::string read_text_file(const std::string& path, const std::string& cannot_open) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, cannot_open);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace dynscope

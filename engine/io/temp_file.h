@@ -1,4 +1,5 @@
-// Atomic file writes for every writer: write to a temporary file next to the target, then rename.
+// Atomic file writes for every writer (write to a temporary file next to the target, then rename),
+// and the matching whole-file read.
 #pragma once
 
 #include <string>
@@ -30,5 +31,8 @@ class TempFile {
 /// Writes `text` to `path` through a TempFile, so an existing file is replaced only by a complete
 /// one. Throws IoError naming `path` if it cannot be written.
 void write_text_file_atomically(const std::string& path, const std::string& text);
+
+/// The whole content of `path`. Throws IoError(path, cannot_open) if it cannot be opened.
+std::string read_text_file(const std::string& path, const std::string& cannot_open = "cannot open");
 
 }  // namespace dynscope

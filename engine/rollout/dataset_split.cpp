@@ -2,12 +2,11 @@
 #include "engine/rollout/dataset_split.h"
 
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "engine/core/error.h"
+#include "engine/io/temp_file.h"
 
 namespace dynscope {
 
@@ -18,16 +17,11 @@ DatasetSplit read_dataset_split(const std::string& dir, const std::string& split
   namespace fs = std::filesystem;
   const std::string path = (fs::path(dir) / "manifest.json").string();
   if (!fs::is_directory(dir)) throw IoError(dir, "dataset directory does not exist");
-  std::ifstream in(path);
-  if (!in)
-    throw IoError(path,
-                  "cannot open dataset manifest (is this a `dynscope generate` "
-                  "output directory?)");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = read_text_file(
+      path, "cannot open dataset manifest (is this a `dynscope generate` output directory?)");
   nlohmann::json m;
   try {
-    m = nlohmann::json::parse(text.str());
+    m = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw FormatError(path, "manifest", std::string("malformed JSON: ") + e.what());
   }

@@ -3,12 +3,11 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "engine/core/error.h"
 #include "engine/io/scene_file.h"
+#include "engine/io/temp_file.h"
 
 namespace dynscope {
 
@@ -233,13 +232,10 @@ std::string eval_to_json(const EvalSummary& s) {
 }
 
 EvalSummary read_eval_json(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError(path, "cannot open evaluation file");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = read_text_file(path, "cannot open evaluation file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw FormatError(path, "json",
                       "not a JSON file (parse error at byte " + std::to_string(e.byte) +

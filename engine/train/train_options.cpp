@@ -6,13 +6,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "engine/core/error.h"
 #include "engine/core/threads.h"
+#include "engine/io/temp_file.h"
 
 namespace dynscope {
 namespace {
@@ -293,10 +292,7 @@ SamplingOptions checkpoint_sampling(const std::string& checkpoint, const ModelCo
   SamplingOptions s;
   s.input = config.input;
   if (!std::filesystem::exists(path)) return s;
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return TrainOptions::from_json(text.str(), path).sampling;
+  return TrainOptions::from_json(read_text_file(path), path).sampling;
 }
 
 }  // namespace dynscope
