@@ -30,6 +30,7 @@
 #include "engine/rollout/dataset_split.h"
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
+#include "engine/train/adam_step.h"
 #include "engine/train/process_group_torch.h"
 #include "engine/train/train_state.h"
 
@@ -448,7 +449,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     for (torch::optim::OptimizerParamGroup& g : optimizer.param_groups()) {
       static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
     }
-    optimizer.step();
+    adam_step(optimizer);
     result.train_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - step_start).count();
     ++step;

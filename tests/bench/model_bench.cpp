@@ -8,6 +8,7 @@
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -22,6 +23,7 @@
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
 #include "engine/model/torch_runtime.h"
+#include "engine/train/adam_step.h"
 #include "engine/train/train_options.h"
 
 namespace dynscope {
@@ -192,38 +194,64 @@ TrainCase movi_train_case() {
   return c;
 }
 
-// One optimiser step: forward, Huber loss, backward, Adam. Arguments {impl, hierarchy}: with
-// hierarchy = 1 the step also builds the example's hierarchy (what training does when the
-// prefetch thread cannot hide it).
+// One optimiser step: forward, Huber loss, backward, Adam. Arguments {impl, hierarchy,
+// torch_adam}: with hierarchy = 1 the step also builds the example's hierarchy (what training does
+// when the prefetch thread cannot hide it); torch_adam = 1 updates with LibTorch's Adam::step
+// instead of the one-loop adam_step training uses.
 void BM_TrainStep(benchmark::State& state) {
   set_torch_threads(1);
   TrainCase c = movi_train_case();
   state.SetLabel(use_implementation(state.range(0), c.model->config()) +
-                 (state.range(1) ? " +hierarchy" : "") + ", " + std::to_string(c.state.size()) +
-                 " points, 1 thread");
+                 (state.range(1) ? " +hierarchy" : "") + (state.range(2) ? " +LibTorch Adam" : "") +
+                 ", " + std::to_string(c.state.size()) + " points, 1 thread");
   torch::optim::Adam adam(c.model->parameters(), torch::optim::AdamOptions(5e-3));
   const ModelInput prepared = make_model_input(c.state, c.model->build_hierarchy(c.state));
+  // The step's phases, in milliseconds per step: forward (with the loss), backward, optimiser.
+  using Clock = std::chrono::steady_clock;
+  double forward_s = 0, backward_s = 0, optimiser_s = 0;
+  auto since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
   for (auto _ : state) {
     const ModelInput input =
         state.range(1) ? make_model_input(c.state, c.model->build_hierarchy(c.state)) : prepared;
+    auto t = Clock::now();
     adam.zero_grad();
     const torch::Tensor err = (c.model->predict_positions(input) - c.truth).to(torch::kFloat);
-    torch::nn::functional::huber_loss(err, torch::zeros_like(err)).backward();
-    adam.step();
+    const torch::Tensor loss = torch::nn::functional::huber_loss(err, torch::zeros_like(err));
+    forward_s += since(t);
+    t = Clock::now();
+    loss.backward();
+    backward_s += since(t);
+    t = Clock::now();
+    if (state.range(2)) {
+      adam.step();
+    } else {
+      adam_step(adam);
+    }
+    optimiser_s += since(t);
   }
+  const auto per_step = [&](double s) {
+    return 1e3 * s / static_cast<double>(std::max<int64_t>(1, state.iterations()));
+  };
+  state.counters["forward_ms"] = per_step(forward_s);
+  state.counters["backward_ms"] = per_step(backward_s);
+  state.counters["optimiser_ms"] = per_step(optimiser_s);
   state.counters["steps_per_s"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   set_conv_implementation(ConvImplementation::kFused);
 }
 BENCHMARK(BM_TrainStep)
-    ->Args({0, 0})
-    ->Args({3, 0})
-    ->Args({2, 0})
-    ->Args({1, 0})
-    ->Args({0, 1})
-    ->Args({3, 1})
-    ->Args({1, 1})
-    ->ArgNames({"impl", "hierarchy"})
+    ->Args({0, 0, 0})
+    ->Args({0, 0, 1})
+    ->Args({3, 0, 0})
+    ->Args({2, 0, 0})
+    ->Args({1, 0, 0})
+    ->Args({1, 0, 1})
+    ->Args({0, 1, 0})
+    ->Args({3, 1, 0})
+    ->Args({1, 1, 0})
+    ->ArgNames({"impl", "hierarchy", "torch_adam"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
