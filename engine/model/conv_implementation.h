@@ -19,4 +19,9 @@ ConvImplementation conv_implementation();
 /// Selects it for subsequent forward passes.
 void set_conv_implementation(ConvImplementation implementation);
 
+/// The instruction-set clone of the fused kernels this CPU runs under kFused: "x86-64-v4"
+/// (AVX-512), "x86-64-v3" (AVX2+FMA) or "baseline", chosen by the same load-time dispatch as the
+/// kernels themselves.
+const char* fused_kernel_isa();
+
 }  // namespace dynscope

@@ -22,12 +22,18 @@ using torch::autograd::tensor_list;
 constexpr int64_t kGrain = 64;
 
 // Every kernel body below is force-inlined into two entry points: one compiled for the baseline
-// instruction set (ConvImplementation::kFusedBaseline) and one cloned for AVX-512, AVX2+FMA and the
-// baseline, the clone chosen once at load time from the CPU (GCC function multiversioning). The
-// inner loops run over the filter width J, which `omp simd` vectorises to J lanes.
+// instruction set (ConvImplementation::kFusedBaseline) and one cloned for the x86-64 levels v4
+// (AVX-512) and v3 (AVX2+FMA) and the baseline, the clone chosen once at load time from the CPU's
+// features (GCC function multiversioning). Levels, not CPU models: a clone for a model
+// ("arch=skylake-avx512", "arch=haswell") is chosen only on that vendor's model, so every AMD CPU
+// ran the baseline. The inner loops run over the filter width J, which `omp simd` vectorises to J
+// lanes.
+// fused_kernel_isa() reports the clone by the same dispatch on the same two targets.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define DYNSCOPE_ISA_V4 "arch=x86-64-v4"
+#define DYNSCOPE_ISA_V3 "arch=x86-64-v3"
 #define DYNSCOPE_SIMD_CLONES \
-  __attribute__((target_clones("arch=skylake-avx512", "arch=haswell", "default")))
+  __attribute__((target_clones(DYNSCOPE_ISA_V4, DYNSCOPE_ISA_V3, "default")))
 #else
 #define DYNSCOPE_SIMD_CLONES
 #endif

@@ -349,7 +349,18 @@ struct GatherAddFunction : torch::autograd::Function<GatherAddFunction> {
 
 std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
 
+// One version per clone of DYNSCOPE_SIMD_CLONES, dispatched by the same rule.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target("default"))) const char* isa_of_this_cpu() { return "baseline"; }
+__attribute__((target(DYNSCOPE_ISA_V3))) const char* isa_of_this_cpu() { return "x86-64-v3"; }
+__attribute__((target(DYNSCOPE_ISA_V4))) const char* isa_of_this_cpu() { return "x86-64-v4"; }
+#else
+const char* isa_of_this_cpu() { return "baseline"; }
+#endif
+
 }  // namespace
+
+const char* fused_kernel_isa() { return isa_of_this_cpu(); }
 
 ConvImplementation conv_implementation() { return g_implementation.load(); }
 

@@ -8,6 +8,7 @@
 
 #include "engine/core/system_info.h"
 #include "engine/core/threads.h"
+#include "engine/model/conv_implementation.h"
 
 namespace dynscope {
 
@@ -21,6 +22,7 @@ std::vector<std::pair<std::string, std::string>> torch_context() {
                                : "not built with CUDA");
   out.emplace_back("torch_intraop_threads", std::to_string(at::get_num_threads()));
   out.emplace_back("torch_interop_threads", std::to_string(at::get_num_interop_threads()));
+  out.emplace_back("kernel_isa", fused_kernel_isa());
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <torch/nn/modules/linear.h>
 
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "engine/core/error.h"
@@ -152,6 +153,20 @@ TEST(FusedPointConvTest, InstructionSetClonesMatchTheBaselineKernels) {
   const torch::Tensor baseline = gather_add(q, s, r, in.index);
   set_conv_implementation(ConvImplementation::kFused);
   EXPECT_TRUE(torch::allclose(simd, baseline, 1e-6, 1e-6));
+}
+
+// The kernels run the best clone this CPU supports, whatever its vendor: clones named after one
+// vendor's CPU models ("arch=skylake-avx512") once left every AMD CPU on the baseline.
+TEST(FusedPointConvTest, TheKernelsRunTheCloneOfThisCpusInstructionSetLevel) {
+  const std::string isa = fused_kernel_isa();
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+  const char* expected = __builtin_cpu_supports("x86-64-v4")   ? "x86-64-v4"
+                         : __builtin_cpu_supports("x86-64-v3") ? "x86-64-v3"
+                                                               : "baseline";
+  EXPECT_EQ(isa, expected);
+#else
+  EXPECT_EQ(isa, "baseline");
+#endif
 }
 
 TEST(FusedPointConvTest, AggregatePassesGradcheckInDouble) {
