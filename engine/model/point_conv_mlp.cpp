@@ -25,6 +25,29 @@ struct InferenceArgs {
   const float *e1, *c1, *e2t, *c2;             // e1 [P,3]; e2t [P,P] (in, out); null: none
 };
 
+// The MLP sizes: filter width J, WeightNet hidden width H, embedding width P and its hidden width
+// P'. A size given as a template argument (>= 0) is known at compile time, so every small loop
+// below becomes a few whole vector operations; -1 reads it at run time.
+template <int kJ, int kH, int kP, int kPH>
+struct MlpDims {
+  int64_t j, h, p, ph;
+  constexpr int64_t J() const { return kJ >= 0 ? kJ : j; }
+  constexpr int64_t H() const { return kH >= 0 ? kH : h; }
+  constexpr int64_t P() const { return kP >= 0 ? kP : p; }
+  constexpr int64_t PH() const { return kPH >= 0 ? kPH : ph; }
+  constexpr Width<(kJ > 0 ? kJ : 0)> width() const { return {J()}; }
+};
+
+// Calls `f(MlpDims<...>)` with the sizes fixed at compile time where they are the model's
+// (J = 16, H = 8, with the 8-wide embedding of the object convolutions or none, as in the
+// relational ones).
+template <typename F>
+void with_mlp_dims(int64_t j, int64_t h, int64_t p, int64_t ph, F&& f) {
+  if (j == 16 && h == 8 && p == 8 && ph == 8) return f(MlpDims<16, 8, 8, 8>{16, 8, 8, 8});
+  if (j == 16 && h == 8 && p == 0) return f(MlpDims<16, 8, 0, 0>{16, 8, 0, 0});
+  f(MlpDims<-1, -1, -1, -1>{j, h, p, ph});
+}
+
 // y[o] = bias[o] + Σ_i x[i] wt[i·n + o] for o < n, then ReLU when `relu`.
 DYNSCOPE_KERNEL_BODY void small_linear(float* __restrict y, const float* __restrict x, int64_t in,
                                        const float* __restrict wt, const float* __restrict bias,
@@ -53,16 +76,17 @@ DYNSCOPE_KERNEL_BODY void first_layer(float* __restrict y, const float* __restri
 }
 
 // Rows [begin, end) of the inference aggregation; `scratch` holds C'·J + 2·H + J + 2·P floats.
-template <int kJ>
+template <class D>
 DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out, int64_t begin,
-                                              int64_t end, Width<kJ> width, float* scratch) {
-  const int64_t j = width(), c = a.c, p = a.p, ct = c + p, k = a.k;
+                                              int64_t end, D d, float* scratch) {
+  const int64_t j = d.J(), c = a.c, p = d.P(), ct = c + p, k = a.k, hd = d.H(), ph = d.PH();
+  const auto width = d.width();
   float* acc = scratch;
   float* h1 = acc + ct * j;
-  float* h2 = h1 + a.hidden;
-  float* hk = h2 + a.hidden;
+  float* h2 = h1 + hd;
+  float* hk = h2 + hd;
   float* p1 = hk + j;
-  float* pe = p1 + a.pos_hidden;
+  float* pe = p1 + ph;
   for (int64_t q = begin; q < end; ++q) {
     std::fill(acc, acc + ct * j, 0.0f);
     for (int64_t n = 0; n < k; ++n) {
@@ -70,9 +94,9 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
       const int64_t src = a.index[e];
       if (src < 0) continue;
       const float* r = a.rel + e * 3;
-      first_layer(h1, r, a.w1, a.b1, a.hidden);
-      small_linear(h2, h1, a.hidden, a.w2t, a.b2, a.hidden, true);
-      small_linear(hk, h2, a.hidden, a.w3t, a.b3, j, false);
+      first_layer(h1, r, a.w1, a.b1, hd);
+      small_linear(h2, h1, hd, a.w2t, a.b2, hd, true);
+      small_linear(hk, h2, hd, a.w3t, a.b3, j, false);
       if (a.gate) {
         const float g = a.gate[e];
 #pragma omp simd
@@ -80,8 +104,8 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
       }
       add_outer(acc, a.features + src * c, c, hk, width);
       if (p > 0) {
-        first_layer(p1, r, a.e1, a.c1, a.pos_hidden);
-        small_linear(pe, p1, a.pos_hidden, a.e2t, a.c2, p, false);
+        first_layer(p1, r, a.e1, a.c1, ph);
+        small_linear(pe, p1, ph, a.e2t, a.c2, p, false);
         add_outer(acc + c * j, pe, p, hk, width);
       }
     }
@@ -92,16 +116,16 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
   }
 }
 
-template <int kJ>
-void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, int64_t end,
-                             Width<kJ> width, float* scratch) {
-  inference_rows_body(a, out, begin, end, width, scratch);
+template <class D>
+void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, int64_t end, D d,
+                             float* scratch) {
+  inference_rows_body(a, out, begin, end, d, scratch);
 }
 
-template <int kJ>
+template <class D>
 DYNSCOPE_SIMD_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
-                                              int64_t end, Width<kJ> width, float* scratch) {
-  inference_rows_body(a, out, begin, end, width, scratch);
+                                              int64_t end, D d, float* scratch) {
+  inference_rows_body(a, out, begin, end, d, scratch);
 }
 
 // Offsets of the weight gradients in one flat per-worker buffer, in the transposed layouts the
@@ -129,80 +153,124 @@ struct MlpGradLayout {
   }
 };
 
-// Backward of y = Wᵀ-stored linear (wt `[in][out]`) on a ReLU output x: accumulates dwt += x ⊗ dy
-// and db += dy, and writes dx = (wt · dy) where x > 0 (the ReLU that produced x), else 0.
-DYNSCOPE_KERNEL_BODY void linear_backward(float* __restrict dwt, float* __restrict db,
-                                          const float* __restrict wt, const float* __restrict x,
-                                          int64_t in, const float* __restrict dy, int64_t out,
-                                          float* __restrict dx) {
+// dx[i] = (wt[i,:] · dy) where the ReLU output x[i] > 0, else 0: the input gradient of a linear
+// stored transposed (wt `[in][out]`) whose input came out of a ReLU.
+DYNSCOPE_KERNEL_BODY void linear_input_grad(float* __restrict dx, const float* __restrict wt,
+                                            const float* __restrict x, int64_t in,
+                                            const float* __restrict dy, int64_t out) {
   for (int64_t i = 0; i < in; ++i) {
-    float* __restrict row = dwt + i * out;
     const float* __restrict w = wt + i * out;
-    const float v = x[i];
     float s = 0.0f;
 #pragma omp simd reduction(+ : s)
-    for (int64_t o = 0; o < out; ++o) {
-      row[o] += v * dy[o];
-      s += w[o] * dy[o];
+    for (int64_t o = 0; o < out; ++o) s += w[o] * dy[o];
+    dx[i] = x[i] > 0.0f ? s : 0.0f;
+  }
+}
+
+// Weight and bias gradients of a linear over n edges at once: dwt[i,o] += Σ_e x[e,i] dy[e,o] and
+// db[o] += Σ_e dy[e,o], for x `[n][in]` and dy `[n][out]`. Each row of dwt is read and written
+// once per call, its sum over the edges kept in registers.
+DYNSCOPE_KERNEL_BODY void linear_weight_grad(float* __restrict dwt, float* __restrict db,
+                                             const float* __restrict x, int64_t in,
+                                             const float* __restrict dy, int64_t out, int64_t n) {
+  constexpr int64_t kMaxOut = 32;
+  float acc[kMaxOut];
+  for (int64_t o0 = 0; o0 < out; o0 += kMaxOut) {
+    const int64_t w = std::min(kMaxOut, out - o0);
+    for (int64_t i = 0; i < in; ++i) {
+      float* __restrict row = dwt + i * out + o0;
+#pragma omp simd
+      for (int64_t o = 0; o < w; ++o) acc[o] = row[o];
+      for (int64_t e = 0; e < n; ++e) {
+        const float v = x[e * in + i];
+        const float* __restrict g = dy + e * out + o0;
+#pragma omp simd
+        for (int64_t o = 0; o < w; ++o) acc[o] += v * g[o];
+      }
+#pragma omp simd
+      for (int64_t o = 0; o < w; ++o) row[o] = acc[o];
     }
-    dx[i] = v > 0.0f ? s : 0.0f;
-  }
-  for (int64_t o = 0; o < out; ++o) db[o] += dy[o];
-}
-
-// Backward of first_layer's weights (`[n,3]`) and biases for the pre-activation gradient da.
-DYNSCOPE_KERNEL_BODY void first_layer_backward(float* __restrict dw, float* __restrict db,
-                                               const float* __restrict r,
-                                               const float* __restrict da, int64_t n) {
-  for (int64_t o = 0; o < n; ++o) {
-    db[o] += da[o];
-    for (int d3 = 0; d3 < 3; ++d3) dw[o * 3 + d3] += da[o] * r[d3];
+#pragma omp simd
+    for (int64_t o = 0; o < w; ++o) acc[o] = db[o0 + o];
+    for (int64_t e = 0; e < n; ++e) {
+      const float* __restrict g = dy + e * out + o0;
+#pragma omp simd
+      for (int64_t o = 0; o < w; ++o) acc[o] += g[o];
+    }
+#pragma omp simd
+    for (int64_t o = 0; o < w; ++o) db[o0 + o] = acc[o];
   }
 }
 
-// Gradients of the MLP aggregation for rows [begin, end): recomputes each neighbour's h and e,
-// then backpropagates through the outer product, the gate and both MLPs. `d_feat` is this
-// worker's `[N,C]` buffer (or null), `dw` its weight-gradient buffer, `d_gate` `[M,K]` (or null).
-template <int kJ>
+// Weight and bias gradients of first_layer (`[n_out,3]`) over n edges: da `[n][n_out]` is the
+// pre-activation gradient of each edge and rel + edge[e]·3 its relative position.
+DYNSCOPE_KERNEL_BODY void first_layer_weight_grad(float* __restrict dw, float* __restrict db,
+                                                  const float* __restrict rel,
+                                                  const int64_t* __restrict edge,
+                                                  const float* __restrict da, int64_t n_out,
+                                                  int64_t n) {
+  for (int64_t e = 0; e < n; ++e) {
+    const float* r = rel + edge[e] * 3;
+    const float* __restrict g = da + e * n_out;
+    for (int64_t o = 0; o < n_out; ++o) {
+      db[o] += g[o];
+      for (int d3 = 0; d3 < 3; ++d3) dw[o * 3 + d3] += g[o] * r[d3];
+    }
+  }
+}
+
+// Gradients of the MLP aggregation for rows [begin, end). Per query: each valid neighbour's h and
+// e are recomputed and its feature, gate and hidden-layer gradients computed; then the weight
+// gradients of all the query's neighbours are added at once. `d_feat` is this worker's `[N,C]`
+// buffer (or null), `dw` its weight-gradient buffer, `d_gate` `[M,K]` (or null). `scratch` holds
+// mlp_grad_scratch floats, `edges` K entries.
+template <class D>
 DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float* grad,
                                              float* d_feat, float* d_gate, float* dw,
                                              const MlpGradLayout& lay, int64_t begin, int64_t end,
-                                             Width<kJ> width, float* scratch) {
-  const int64_t j = width(), c = a.c, p = a.p, ct = c + p, k = a.k;
-  const int64_t hd = a.hidden, ph = a.pos_hidden;
+                                             D d, float* scratch, int64_t* edges) {
+  const int64_t j = d.J(), c = a.c, p = d.P(), ct = c + p, k = a.k;
+  const int64_t hd = d.H(), ph = d.PH();
+  const auto width = d.width();
   float* gt = scratch;     // [C'][J]
   float* x = gt + ct * j;  // [C']
   float* dx = x + ct;      // [C']
-  float* h1 = dx + ct;
-  float* h2 = h1 + hd;
-  float* hk = h2 + hd;  // h before the gate
-  float* dh = hk + j;
-  float* dh2 = dh + j;
-  float* dh1 = dh2 + hd;
-  float* p1 = dh1 + hd;
-  float* dp1 = p1 + ph;
+  float* hk = dx + ct;     // [J]: h before the gate
+  // Per valid neighbour of the query, row by row:
+  float* h1 = hk + j;       // [K][H]
+  float* h2 = h1 + k * hd;  // [K][H]
+  float* dh = h2 + k * hd;  // [K][J]: gradient of h before the gate
+  float* dh2 = dh + k * j;  // [K][H]
+  float* dh1 = dh2 + k * hd;
+  float* p1 = dh1 + k * hd;  // [K][P']
+  float* de = p1 + k * ph;   // [K][P]: gradient of the embedding
+  float* dp1 = de + k * p;   // [K][P']
   for (int64_t q = begin; q < end; ++q) {
     const float* g = grad + q * j * ct;
     for (int64_t jj = 0; jj < j; ++jj) {
       for (int64_t cc = 0; cc < ct; ++cc) gt[cc * j + jj] = g[jj * ct + cc];
     }
+    int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
       const int64_t e = q * k + n;
       const int64_t src = a.index[e];
       if (src < 0) continue;
       const float* r = a.rel + e * 3;
       const float gate = a.gate ? a.gate[e] : 1.0f;
-      first_layer(h1, r, a.w1, a.b1, hd);
-      small_linear(h2, h1, hd, a.w2t, a.b2, hd, true);
-      small_linear(hk, h2, hd, a.w3t, a.b3, j, false);
+      float* h1e = h1 + nv * hd;
+      float* h2e = h2 + nv * hd;
+      float* dhe = dh + nv * j;
+      first_layer(h1e, r, a.w1, a.b1, hd);
+      small_linear(h2e, h1e, hd, a.w2t, a.b2, hd, true);
+      small_linear(hk, h2e, hd, a.w3t, a.b3, j, false);
       std::copy(a.features + src * c, a.features + (src + 1) * c, x);
       if (p > 0) {
-        first_layer(p1, r, a.e1, a.c1, ph);
-        small_linear(x + c, p1, ph, a.e2t, a.c2, p, false);
+        first_layer(p1 + nv * ph, r, a.e1, a.c1, ph);
+        small_linear(x + c, p1 + nv * ph, ph, a.e2t, a.c2, p, false);
       }
       // d(gated h)[j] = Σ_c G[j,c] x[c]; dx[c] = Σ_j gate·h[j] G[j,c].
-      std::fill(dh, dh + j, 0.0f);
-      add_filter_grad(dh, gt, x, ct, width);
+      std::fill(dhe, dhe + j, 0.0f);
+      add_filter_grad(dhe, gt, x, ct, width);
       std::fill(dx, dx + ct, 0.0f);
       for (int64_t jj = 0; jj < j; ++jj) {
         const float hj = gate * hk[jj];
@@ -217,36 +285,50 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
       }
       if (d_gate) {
         float dg = 0.0f;
-        for (int64_t jj = 0; jj < j; ++jj) dg += dh[jj] * hk[jj];
+        for (int64_t jj = 0; jj < j; ++jj) dg += dhe[jj] * hk[jj];
         d_gate[e] = dg;
       }
-      for (int64_t jj = 0; jj < j; ++jj) dh[jj] *= gate;
+#pragma omp simd
+      for (int64_t jj = 0; jj < j; ++jj) dhe[jj] *= gate;
       // WeightNet: h = W3 h2 + b3, h2 = relu(W2 h1 + b2), h1 = relu(W1 r + b1).
-      linear_backward(dw + lay.w3t, dw + lay.b3, a.w3t, h2, hd, dh, j, dh2);
-      linear_backward(dw + lay.w2t, dw + lay.b2, a.w2t, h1, hd, dh2, hd, dh1);
-      first_layer_backward(dw + lay.w1, dw + lay.b1, r, dh1, hd);
+      linear_input_grad(dh2 + nv * hd, a.w3t, h2e, hd, dhe, j);
+      linear_input_grad(dh1 + nv * hd, a.w2t, h1e, hd, dh2 + nv * hd, hd);
       if (p > 0) {
         // e = E2 p1 + c2, p1 = relu(E1 r + c1); de = dx[C:].
-        linear_backward(dw + lay.e2t, dw + lay.c2, a.e2t, p1, ph, dx + c, p, dp1);
-        first_layer_backward(dw + lay.e1, dw + lay.c1, r, dp1, ph);
+        std::copy(dx + c, dx + ct, de + nv * p);
+        linear_input_grad(dp1 + nv * ph, a.e2t, p1 + nv * ph, ph, de + nv * p, p);
       }
+      edges[nv++] = e;
+    }
+    if (nv == 0) continue;
+    linear_weight_grad(dw + lay.w3t, dw + lay.b3, h2, hd, dh, j, nv);
+    linear_weight_grad(dw + lay.w2t, dw + lay.b2, h1, hd, dh2, hd, nv);
+    first_layer_weight_grad(dw + lay.w1, dw + lay.b1, a.rel, edges, dh1, hd, nv);
+    if (p > 0) {
+      linear_weight_grad(dw + lay.e2t, dw + lay.c2, p1, ph, de, p, nv);
+      first_layer_weight_grad(dw + lay.e1, dw + lay.c1, a.rel, edges, dp1, ph, nv);
     }
   }
 }
 
-template <int kJ>
-void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_feat, float* d_gate,
-                            float* dw, const MlpGradLayout& lay, int64_t begin, int64_t end,
-                            Width<kJ> width, float* scratch) {
-  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, width, scratch);
+// Floats of mlp_grad_rows_body's scratch.
+int64_t mlp_grad_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
+  return ct * j + 2 * ct + j + k * (4 * hd + j + 2 * ph + p);
 }
 
-template <int kJ>
+template <class D>
+void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_feat, float* d_gate,
+                            float* dw, const MlpGradLayout& lay, int64_t begin, int64_t end, D d,
+                            float* scratch, int64_t* edges) {
+  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+}
+
+template <class D>
 DYNSCOPE_SIMD_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float* grad,
                                              float* d_feat, float* d_gate, float* dw,
                                              const MlpGradLayout& lay, int64_t begin, int64_t end,
-                                             Width<kJ> width, float* scratch) {
-  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, width, scratch);
+                                             D d, float* scratch, int64_t* edges) {
+  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
 }
 
 // What the MLP aggregation's kernels read, prepared once per call: contiguous float inputs and the
@@ -320,13 +402,13 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     float* o = out.data_ptr<float>();
     const bool simd = use_simd_clones();
     const int64_t scratch = ct * j + 2 * a.hidden + j + a.pos_hidden + a.p;
-    with_width(j, [&](auto width) {
+    with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
       at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
         std::vector<float> buffer(static_cast<size_t>(scratch));
         if (simd) {
-          inference_rows_simd(a, o, begin, end, width, buffer.data());
+          inference_rows_simd(a, o, begin, end, dims, buffer.data());
         } else {
-          inference_rows_baseline(a, o, begin, end, width, buffer.data());
+          inference_rows_baseline(a, o, begin, end, dims, buffer.data());
         }
       });
     });
@@ -351,20 +433,21 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     torch::Tensor dw = torch::zeros({part.parts, lay.size}, grad.options());
     const bool simd = use_simd_clones();
     const int64_t ct = a.c + a.p;
-    const int64_t scratch = ct * j + 2 * ct + 3 * a.hidden + 2 * j + a.hidden + 2 * a.pos_hidden;
-    with_width(j, [&](auto width) {
+    const int64_t scratch = mlp_grad_scratch(ct, j, a.hidden, a.p, a.pos_hidden, k);
+    with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
       at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
         std::vector<float> buffer(static_cast<size_t>(scratch));
+        std::vector<int64_t> edges(static_cast<size_t>(k));
         for (int64_t wk = first; wk < last; ++wk) {
           float* d_feat = want_feat ? feat_buffers.data_ptr<float>() + wk * n_src * a.c : nullptr;
           float* dg = want_gate ? d_gate.data_ptr<float>() : nullptr;
           float* dwp = dw.data_ptr<float>() + wk * lay.size;
           if (simd) {
             mlp_grad_rows_simd(a, grad.data_ptr<float>(), d_feat, dg, dwp, lay, part.begin(wk),
-                               part.end(wk), width, buffer.data());
+                               part.end(wk), dims, buffer.data(), edges.data());
           } else {
             mlp_grad_rows_baseline(a, grad.data_ptr<float>(), d_feat, dg, dwp, lay, part.begin(wk),
-                                   part.end(wk), width, buffer.data());
+                                   part.end(wk), dims, buffer.data(), edges.data());
           }
         }
       });
