@@ -1,8 +1,10 @@
-// LibTorch context lines and the one place that sets LibTorch's thread count.
+// LibTorch context lines, the one place that sets LibTorch's thread count, and the allocator
+// settings of every process that runs the model.
 #include "engine/model/torch_runtime.h"
 
 #include <ATen/Context.h>
 #include <ATen/Parallel.h>
+#include <malloc.h>
 #include <torch/cuda.h>
 #include <torch/version.h>
 
@@ -11,6 +13,21 @@
 #include "engine/model/conv_implementation.h"
 
 namespace dynscope {
+namespace {
+
+// LibTorch's CPU tensors come from malloc, and a model step frees and reallocates the same few
+// megabytes every time. With glibc's defaults the freed top of the heap goes back to the kernel
+// and the next step faults it in again, zeroed: 11 % of a training step's profile was page
+// faults. Keep up to 128 MiB of freed memory for reuse, grow the heap 16 MiB at a time, and map
+// only blocks above 32 MiB on their own (so huge tensors still return to the system).
+const bool kAllocatorConfigured = [] {
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 128 << 20);
+  mallopt(M_TOP_PAD, 16 << 20);
+  return true;
+}();
+
+}  // namespace
 
 std::vector<std::pair<std::string, std::string>> torch_context() {
   std::vector<std::pair<std::string, std::string>> out = system_context();
