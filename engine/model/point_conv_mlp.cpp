@@ -3,6 +3,7 @@
 #include <ATen/Parallel.h>
 #include <torch/autograd.h>
 
+#include <cstring>
 #include <vector>
 
 #include "engine/core/error.h"
@@ -219,6 +220,36 @@ DYNSCOPE_KERNEL_BODY void first_layer_weight_grad(float* __restrict dw, float* _
   }
 }
 
+// 16 floats as one value: one AVX-512 register in the v4 clone, two or four in the others.
+typedef float Lanes16 __attribute__((vector_size(64)));
+
+// acc += s · p[0, 16).
+DYNSCOPE_KERNEL_BODY void add_scaled16(Lanes16& acc, float s, const float* p) {
+  Lanes16 v;
+  std::memcpy(&v, p, sizeof v);
+  acc += s * v;
+}
+
+// The padded width of a C'-wide row: a whole number of Lanes16.
+constexpr int64_t padded16(int64_t n) { return (n + 15) / 16 * 16; }
+
+// y[0, w) = Σ_j s[j] · rows[j·w, (j+1)·w) for w a multiple of 16, the sums kept in registers
+// (two chains, so the additions overlap) and each y written once.
+DYNSCOPE_KERNEL_BODY void combine_rows(float* __restrict y, const float* __restrict rows, int64_t w,
+                                       const float* __restrict s, int64_t j) {
+  for (int64_t c0 = 0; c0 < w; c0 += 16) {
+    Lanes16 even = {}, odd = {};
+    int64_t jj = 0;
+    for (; jj + 1 < j; jj += 2) {
+      add_scaled16(even, s[jj], rows + jj * w + c0);
+      add_scaled16(odd, s[jj + 1], rows + (jj + 1) * w + c0);
+    }
+    if (jj < j) add_scaled16(even, s[jj], rows + jj * w + c0);
+    const Lanes16 sum = even + odd;
+    std::memcpy(y + c0, &sum, sizeof sum);
+  }
+}
+
 // Gradients of the MLP aggregation for rows [begin, end). Per query: each valid neighbour's h and
 // e are recomputed and its feature, gate and hidden-layer gradients computed; then the weight
 // gradients of all the query's neighbours are added at once. `d_feat` is this worker's `[N,C]`
@@ -232,12 +263,15 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
   const int64_t j = d.J(), c = a.c, p = d.P(), ct = c + p, k = a.k;
   const int64_t hd = d.H(), ph = d.PH();
   const auto width = d.width();
-  float* gt = scratch;     // [C'][J]
-  float* x = gt + ct * j;  // [C']
-  float* dx = x + ct;      // [C']
-  float* hk = dx + ct;     // [J]: h before the gate
+  const int64_t cp = padded16(ct);
+  float* gt = scratch;      // [C'][J]
+  float* gp = gt + ct * j;  // [J][C' padded]: G with zeroed padding
+  float* x = gp + j * cp;   // [C']
+  float* dx = x + ct;       // [C' padded]
+  float* hk = dx + cp;      // [J]: h before the gate
+  float* hg = hk + j;       // [J]: h after the gate
   // Per valid neighbour of the query, row by row:
-  float* h1 = hk + j;       // [K][H]
+  float* h1 = hg + j;       // [K][H]
   float* h2 = h1 + k * hd;  // [K][H]
   float* dh = h2 + k * hd;  // [K][J]: gradient of h before the gate
   float* dh2 = dh + k * j;  // [K][H]
@@ -249,6 +283,8 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
     const float* g = grad + q * j * ct;
     for (int64_t jj = 0; jj < j; ++jj) {
       for (int64_t cc = 0; cc < ct; ++cc) gt[cc * j + jj] = g[jj * ct + cc];
+      std::copy(g + jj * ct, g + (jj + 1) * ct, gp + jj * cp);
+      std::fill(gp + jj * cp + ct, gp + (jj + 1) * cp, 0.0f);
     }
     int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
@@ -271,13 +307,9 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
       // d(gated h)[j] = Σ_c G[j,c] x[c]; dx[c] = Σ_j gate·h[j] G[j,c].
       std::fill(dhe, dhe + j, 0.0f);
       add_filter_grad(dhe, gt, x, ct, width);
-      std::fill(dx, dx + ct, 0.0f);
-      for (int64_t jj = 0; jj < j; ++jj) {
-        const float hj = gate * hk[jj];
-        const float* __restrict row = g + jj * ct;
 #pragma omp simd
-        for (int64_t cc = 0; cc < ct; ++cc) dx[cc] += hj * row[cc];
-      }
+      for (int64_t jj = 0; jj < j; ++jj) hg[jj] = gate * hk[jj];
+      combine_rows(dx, gp, cp, hg, j);
       if (d_feat) {
         float* __restrict dst = d_feat + src * c;
 #pragma omp simd
@@ -313,7 +345,7 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
 
 // Floats of mlp_grad_rows_body's scratch.
 int64_t mlp_grad_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
-  return ct * j + 2 * ct + j + k * (4 * hd + j + 2 * ph + p);
+  return ct * j + j * padded16(ct) + ct + padded16(ct) + 2 * j + k * (4 * hd + j + 2 * ph + p);
 }
 
 template <class D>
