@@ -27,9 +27,16 @@ void adam_step(torch::optim::Adam& optimizer) {
     const auto& options = static_cast<const torch::optim::AdamOptions&>(group.options());
     if (options.amsgrad()) return static_cast<void>(optimizer.step());
     for (const torch::Tensor& p : group.params()) {
-      if (p.grad().defined() && (!fusable(p) || !fusable(p.grad()))) {
-        return static_cast<void>(optimizer.step());
+      if (!p.grad().defined()) continue;
+      bool ok = fusable(p) && fusable(p.grad());
+      // Moments loaded from a saved state must match the parameter's layout too.
+      const auto found = optimizer.state().find(state_key(p));
+      if (ok && found != optimizer.state().end()) {
+        const auto& state = static_cast<const torch::optim::AdamParamState&>(*found->second);
+        ok = fusable(state.exp_avg()) && fusable(state.exp_avg_sq()) &&
+             state.exp_avg().numel() == p.numel() && state.exp_avg_sq().numel() == p.numel();
       }
+      if (!ok) return static_cast<void>(optimizer.step());
     }
   }
   torch::NoGradGuard no_grad;

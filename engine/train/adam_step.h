@@ -10,7 +10,8 @@ namespace dynscope {
 /// Applies one step of `optimizer` to every parameter with a gradient, as
 /// torch::optim::Adam::step does (moments, bias corrections, weight decay, per-group options),
 /// in float32 loops over contiguous CPU parameters. Falls back to `optimizer.step()` when a
-/// parameter or gradient is not a contiguous float32 CPU tensor or a group asks for AMSGrad.
+/// parameter, its gradient or its saved moments are not contiguous float32 CPU tensors or a group
+/// asks for AMSGrad.
 void adam_step(torch::optim::Adam& optimizer);
 
 }  // namespace dynscope

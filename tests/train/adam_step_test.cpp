@@ -1,6 +1,7 @@
 // adam_step against torch::optim::Adam::step: the same parameters and optimiser state after
 // several steps, with weight decay, two groups and a parameter without a gradient; a state saved
-// after fused steps continues identically under either; the fallback for what it does not fuse.
+// after fused steps continues identically under either; the fallback for what it does not fuse
+// (double parameters, AMSGrad, moments not laid out like their parameter).
 #include "engine/train/adam_step.h"
 
 #include <gtest/gtest.h>
@@ -138,6 +139,22 @@ TEST(AdamStepTest, FallsBackToAdamForWhatItDoesNotFuse) {
     adam_step(f2_adam);
   }
   expect_same({r2[0]}, {f2[0]}, "amsgrad");
+  // Moments in another layout than the parameter (as a state file could hold): still Adam's step.
+  std::vector<torch::Tensor> r3 = make_params(torch::kFloat), f3 = make_params(torch::kFloat);
+  torch::optim::Adam r3_adam = make_adam(r3, 0.0), f3_adam = make_adam(f3, 0.0);
+  for (int s = 0; s < 3; ++s) {
+    set_grads(r3, s);
+    set_grads(f3, s);
+    r3_adam.step();
+    adam_step(f3_adam);
+    if (s == 1) {
+      auto& state = static_cast<torch::optim::AdamParamState&>(
+          *f3_adam.state().at(c10::guts::to_string(f3[0].unsafeGetTensorImpl())));
+      state.exp_avg(state.exp_avg().t().contiguous().t());  // same values, not contiguous
+      ASSERT_FALSE(state.exp_avg().is_contiguous());
+    }
+  }
+  expect_same(r3, f3, "non-contiguous moments");
 }
 
 }  // namespace
