@@ -76,7 +76,7 @@ DYNSCOPE_KERNEL_BODY void first_layer(float* __restrict y, const float* __restri
   }
 }
 
-// Rows [begin, end) of the inference aggregation; `scratch` holds C'·J + 2·H + J + 2·P floats.
+// Rows [begin, end) of the inference aggregation; `scratch` holds inference_scratch floats.
 template <class D>
 DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out, int64_t begin,
                                               int64_t end, D d, float* scratch) {
@@ -115,6 +115,11 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
       for (int64_t cc = 0; cc < ct; ++cc) o[jj * ct + cc] = acc[cc * j + jj];
     }
   }
+}
+
+// Floats of inference_rows_body's scratch: the accumulator C'·J, h1 and h2, h, p1 and e.
+int64_t inference_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph) {
+  return ct * j + 2 * hd + j + ph + p;
 }
 
 template <class D>
@@ -433,7 +438,7 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     torch::Tensor out = torch::empty({m, j * ct}, features.options());
     float* o = out.data_ptr<float>();
     const bool simd = use_simd_clones();
-    const int64_t scratch = ct * j + 2 * a.hidden + j + a.pos_hidden + a.p;
+    const int64_t scratch = inference_scratch(ct, j, a.hidden, a.p, a.pos_hidden);
     with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
       at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
         std::vector<float> buffer(static_cast<size_t>(scratch));
