@@ -1,5 +1,6 @@
 // `dynscope view [SCENE|ROLLOUT|TRACE.h5] [--checkpoint A.pt [--compare B.pt]] [--trace TRACE.h5]
-// [--view VIEW.json] [--screenshot OUT.png] [--size WxH]`: the viewer, with the model behind it.
+// [--view VIEW.json] [--screenshot OUT.png] [--size WxH] [--view-thread auto|on|off]`: the viewer,
+// with the model behind it.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -16,9 +17,11 @@
 #include "app/viewer/platform.h"
 #include "app/viewer/viewer_app.h"
 #include "engine/core/error.h"
+#include "engine/core/log.h"
 #include "engine/io/temp_file.h"
 #include "render/batch_render.h"
 #include "render/context_factory.h"
+#include "render/gl_functions.h"
 #include "render/glfw_context.h"
 #include "render/image.h"
 
@@ -37,7 +40,33 @@ struct ViewOptions {
   std::string screenshot;
   std::string size;
   int warmup_frames = 3;
+  std::string view_thread = "auto";
 };
+
+// Whether the GL driver behind `context` rasterises in software (llvmpipe, softpipe, swrast):
+// its vertex stage then runs on the thread that draws.
+bool software_renderer(const std::string& gl_description) {
+  for (const char* software : {"llvmpipe", "softpipe", "swrast"}) {
+    if (gl_description.find(software) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// --view-thread: "on", "off", or "auto" (on for a window on a software rasteriser, where the 3D
+// view would otherwise hold up the UI thread; off with a GPU, whose draw calls return at once,
+// and for a screenshot, which is one image).
+void apply_view_thread(viewer::ViewerApp& app, render::GlContext& context, const ViewOptions& o,
+                       bool window) {
+  render::GlFunctions gl;
+  gl.load(context);
+  const std::string driver = gl.describe();
+  const bool on =
+      o.view_thread == "on" || (o.view_thread == "auto" && window && software_renderer(driver));
+  if (!on) return;
+  app.set_view_thread(true);
+  log_info("view: the 3D view is drawn on its own thread (", driver,
+           "); --view-thread off draws it on the UI thread");
+}
 
 void load_inputs(viewer::ViewerApp& app, const ViewOptions& o) {
   if (!o.scene_path.empty()) app.state().open_file(o.scene_path);
@@ -59,6 +88,7 @@ void run_headless(const ViewOptions& o, int width, int height) {
   viewer::NullPlatform platform(width, height);
   viewer::EngineModelServices services;
   viewer::ViewerApp app(*context, platform, &services);
+  apply_view_thread(app, *context, o, false);
   load_inputs(app, o);
   // ImGui lays windows out over the first frames (auto-sized tables, popups); draw a few, and
   // wait for rollouts and traces so the picture shows their results.
@@ -88,6 +118,7 @@ void run_window(const ViewOptions& o, int width, int height) {
   viewer::GlfwPlatform platform(*context);
   viewer::EngineModelServices services;
   viewer::ViewerApp app(*context, platform, &services);
+  apply_view_thread(app, *context, o, true);
   // A bad file on the command line becomes the viewer's error popup, as it would from the UI.
   try {
     load_inputs(app, o);
@@ -121,6 +152,13 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("--screenshot", o->screenshot, "Render the UI headless to this PNG and exit");
   cmd->add_option("--size", o->size, "Window / screenshot size WxH (default 1280x800)");
   cmd->add_option("--warmup", o->warmup_frames, "Frames drawn before the screenshot")
+      ->capture_default_str();
+  cmd->add_option("--view-thread", o->view_thread,
+                  "Draw the 3D view on its own thread and off-screen context (on), on the UI "
+                  "thread (off), or auto: on for a window on a software rasteriser (llvmpipe), "
+                  "where drawing large clouds would otherwise slow the panels down; the view "
+                  "then shows the newest finished image")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
   cmd->callback([o] {
     int width = 1280, height = 800;

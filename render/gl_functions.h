@@ -72,6 +72,7 @@ class GlContext;
   X(SCISSOR, Scissor)                                               \
   X(SHADERSOURCE, ShaderSource)                                     \
   X(TEXIMAGE2D, TexImage2D)                                         \
+  X(TEXSUBIMAGE2D, TexSubImage2D)                                   \
   X(TEXPARAMETERI, TexParameteri)                                   \
   X(UNIFORM1F, Uniform1f)                                           \
   X(UNIFORM1I, Uniform1i)                                           \

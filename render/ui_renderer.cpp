@@ -2,6 +2,7 @@
 #include "render/ui_renderer.h"
 
 #include <cstddef>
+#include <string>
 
 #include "engine/core/error.h"
 #include "render/gl_context.h"
@@ -35,9 +36,7 @@ UiRenderer::UiRenderer(GlContext& context) {
 }
 
 UiRenderer::~UiRenderer() {
-  if (!textures_.empty()) {
-    gl_.DeleteTextures(static_cast<GLsizei>(textures_.size()), textures_.data());
-  }
+  for (const TextureSize& t : textures_) gl_.DeleteTextures(1, &t.id);
   gl_.DeleteBuffers(1, &vbo_);
   gl_.DeleteBuffers(1, &ibo_);
   gl_.DeleteVertexArrays(1, &vao_);
@@ -52,8 +51,26 @@ uint64_t UiRenderer::upload_texture(const uint8_t* rgba, int width, int height) 
   gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
   gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
   gl_.check("ui texture upload");
-  textures_.push_back(texture);
+  textures_.push_back({texture, width, height});
   return texture;
+}
+
+void UiRenderer::update_texture(uint64_t texture, const uint8_t* rgba, int width, int height) {
+  for (TextureSize& t : textures_) {
+    if (t.id != texture) continue;
+    gl_.BindTexture(GL_TEXTURE_2D, t.id);
+    gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    if (t.width == width && t.height == height) {
+      gl_.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    } else {
+      gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+      t.width = width;
+      t.height = height;
+    }
+    gl_.check("ui texture update");
+    return;
+  }
+  throw ValueError("texture", "not a texture of this UI renderer: " + std::to_string(texture));
 }
 
 void UiRenderer::render(const UiDrawData& data) {

@@ -58,13 +58,21 @@ class UiRenderer {
 
   /// Uploads an RGBA8 image `[height,width,4]` (e.g. a font atlas); returns its texture id.
   uint64_t upload_texture(const uint8_t* rgba, int width, int height);
+  /// Replaces the pixels of `texture` (an id from upload_texture) with an RGBA8 image
+  /// `[height,width,4]`, reallocating it when the size changed. Throws ValueError for an id this
+  /// renderer did not create.
+  void update_texture(uint64_t texture, const uint8_t* rgba, int width, int height);
   /// Draws `data` over what the framebuffer holds; alpha stays opaque.
   void render(const UiDrawData& data);
 
  private:
   GlFunctions gl_;
   ShaderProgram program_;
-  std::vector<GLuint> textures_;
+  struct TextureSize {
+    GLuint id;
+    int width, height;
+  };
+  std::vector<TextureSize> textures_;
   GLuint vao_ = 0, vbo_ = 0, ibo_ = 0;
 };
 

@@ -30,6 +30,15 @@ ImGuiRenderer::~ImGuiRenderer() {
   if (ImGui::GetCurrentContext() != nullptr) ImGui::GetIO().Fonts->SetTexID(ImTextureID{});
 }
 
+void* ImGuiRenderer::show_image(const render::Image& image) {
+  if (image_texture_ == 0) {
+    image_texture_ = ui_.upload_texture(image.rgba.data(), image.width, image.height);
+  } else {
+    ui_.update_texture(image_texture_, image.rgba.data(), image.width, image.height);
+  }
+  return reinterpret_cast<void*>(static_cast<intptr_t>(image_texture_));
+}
+
 void ImGuiRenderer::render(const ImDrawData* data) {
   if (data == nullptr) return;
   render::UiDrawData out;

@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "render/image.h"
 #include "render/ui_renderer.h"
 
 struct ImDrawData;
@@ -27,9 +28,13 @@ class ImGuiRenderer {
 
   /// Draws `data` (from ImGui::GetDrawData) over what the framebuffer holds.
   void render(const ImDrawData* data);
+  /// Shows `image` (RGBA8, rows top to bottom) through one texture kept for it and returns that
+  /// texture's ImGui id (e.g. for ImDrawList::AddImage); later calls replace its pixels.
+  void* show_image(const render::Image& image);
 
  private:
   render::UiRenderer ui_;
+  uint64_t image_texture_ = 0;  // 0: not created yet
 };
 
 }  // namespace dynscope::app::viewer

@@ -57,6 +57,54 @@ bool ViewerApp::pick(int x, int y) {
   return true;
 }
 
+int64_t ViewerApp::upload_count() const {
+  return renderer_.upload_count() + (view_thread_ ? view_thread_->upload_count() : 0);
+}
+
+void ViewerApp::set_view_thread(bool on) {
+  if (on == view_thread()) return;
+  if (on) {
+    view_thread_ = std::make_unique<render::ViewThread>();
+  } else {
+    view_thread_.reset();
+  }
+  view_texture_ = nullptr;
+}
+
+void ViewerApp::wait_for_view() {
+  if (view_thread_) view_thread_->wait(view_thread_->submitted());
+}
+
+int64_t ViewerApp::view_images() const { return view_thread_ ? view_thread_->images_drawn() : 0; }
+
+void ViewerApp::hand_view_to_thread(const std::vector<Viewport>& ports, bool wait) {
+  render::ViewRequest request;
+  request.width = context_.width();
+  request.height = context_.height();
+  request.clear = state_.view().background;
+  for (const Viewport& p : ports) request.items.push_back({p.scene, p.camera, p.rect});
+  const uint64_t number = view_thread_->submit(std::move(request));
+  if (wait) view_thread_->wait(number);
+  render::Image image;
+  uint64_t drawn = 0;
+  try {
+    if (view_thread_->take(image, drawn)) {
+      const double start = thread_cpu_ms();
+      view_texture_ = imgui_.show_image(image);
+      view_upload_ms_ = thread_cpu_ms() - start;
+    }
+  } catch (const std::exception& e) {
+    state_.select_point(-1);
+    report(e);
+  }
+  // Behind everything ImGui draws, so captions and panels stay on top.
+  if (view_texture_ != nullptr) {
+    ImGui::GetBackgroundDrawList()->AddImage(
+        view_texture_, ImVec2(0, 0),
+        ImVec2(static_cast<float>(context_.width()), static_cast<float>(context_.height())));
+  }
+}
+
 void ViewerApp::report(const std::exception& e) {
   error_ = e.what();
   error_pending_ = true;
@@ -148,6 +196,8 @@ void ViewerApp::frame() {
     report(e);
   }
   error_popup_open_ = false;
+  view_upload_ms_ = 0.0;
+  if (view_thread_) hand_view_to_thread(ports, !screenshot_path_.empty());
   if (ui_visible_) {
     draw_viewport_captions(ports);
     draw_error_popup();
@@ -155,8 +205,8 @@ void ViewerApp::frame() {
   ImGui::Render();
   const double gl_start = thread_cpu_ms();
   render_view(ports);
-  if (ui_visible_) imgui_.render(ImGui::GetDrawData());
-  double gl = thread_cpu_ms() - gl_start;
+  if (ui_visible_ || view_thread_) imgui_.render(ImGui::GetDrawData());
+  double gl = thread_cpu_ms() - gl_start + view_upload_ms_;
   if (!screenshot_path_.empty()) {
     try {
       render::write_png(screenshot_path_, context_.read_pixels());
@@ -173,6 +223,11 @@ void ViewerApp::frame() {
 }
 
 void ViewerApp::render_view(const std::vector<Viewport>& ports) {
+  if (view_thread_) {
+    // The view thread's image covers the window; until the first one, the background.
+    if (view_texture_ == nullptr) renderer_.clear(state_.view().background);
+    return;
+  }
   try {
     if (ports.empty()) renderer_.clear(state_.view().background);
     for (const Viewport& p : ports) renderer_.render(p.scene, p.camera, p.rect);

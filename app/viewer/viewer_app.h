@@ -2,6 +2,7 @@
 // of input, panels, 3D view and UI at a time, cleanup.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "render/gl_context.h"
 #include "render/image.h"
 #include "render/renderer.h"
+#include "render/view_thread.h"
 
 namespace dynscope::app::viewer {
 
@@ -73,8 +75,22 @@ class ViewerApp {
   bool error_popup_open() const { return error_popup_open_; }
   /// Where the last frame's UI-thread CPU went.
   const FrameCpu& frame_cpu() const { return frame_cpu_; }
-  /// Renderer uploads so far (scrubbing must add none).
-  int64_t upload_count() const { return renderer_.upload_count(); }
+  /// Renderer uploads so far, the view thread's included (scrubbing must add none).
+  int64_t upload_count() const;
+
+  /// Draws the 3D view on a render::ViewThread (true) or on this thread (false, the default).
+  /// With the thread, a frame hands the view to it and shows the newest image it has finished,
+  /// so this thread's CPU per frame does not depend on what the view draws (a software
+  /// rasteriser runs its vertex stage on the thread that draws); the view may then lag the
+  /// panels by the time one image takes. Screenshots wait for the image of their own frame.
+  /// Throws Error if the thread's context cannot be created (the viewer stays as it was).
+  void set_view_thread(bool on);
+  bool view_thread() const { return view_thread_ != nullptr; }
+  /// With the view thread: blocks until the view of the last frame is drawn, so that the next
+  /// frame shows it (tests, screenshots). Without: returns at once.
+  void wait_for_view();
+  /// Images the view thread has drawn (0 without it).
+  int64_t view_images() const;
 
  private:
   void sync_layout();
@@ -85,6 +101,7 @@ class ViewerApp {
   bool section(const char* label, Panel panel, bool default_open);
   void apply(Actions& actions);
   void render_view(const std::vector<Viewport>& viewports);
+  void hand_view_to_thread(const std::vector<Viewport>& viewports, bool wait);
   void report(const std::exception& e);
 
   render::GlContext& context_;
@@ -102,6 +119,9 @@ class ViewerApp {
   std::string screenshot_path_;
   std::vector<Action> posted_;
   FrameCpu frame_cpu_;
+  std::unique_ptr<render::ViewThread> view_thread_;
+  void* view_texture_ = nullptr;  // the view thread's newest image, once one was shown
+  double view_upload_ms_ = 0.0;   // CPU of this frame's image upload (counted as GL time)
   // Mouse drag in the 3D view: press position and whether it moved (a click picks).
   bool dragging_ = false;
   float drag_distance_ = 0.0f;

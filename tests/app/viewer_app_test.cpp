@@ -258,3 +258,135 @@ TEST(ViewerApp, ScreenshotWritesTheWholeWindow) {
 
 }  // namespace
 }  // namespace dynscope::app::viewer
+
+namespace dynscope::app::viewer {
+namespace {
+
+// With the view thread, a frame shows the newest image the thread finished; once it has drawn the
+// current state, the window is the same picture as drawing on the UI thread.
+TEST(ViewerApp, TheViewThreadShowsWhatDrawingOnTheUiThreadShows) {
+  render::Image expected;
+  {  // one viewer (ImGui session) at a time
+    HeadlessViewer direct;
+    direct.app.state().open_scene(testing::collide_scene());
+    direct.app.state().set_frame(40);
+    direct.app.frame();
+    direct.app.frame();
+    expected = direct.app.read_pixels();
+  }
+
+  HeadlessViewer v;
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.set_view_thread(true);
+  ASSERT_TRUE(v.app.view_thread());
+  v.app.state().set_frame(40);
+  v.app.frame();
+  v.app.wait_for_view();
+  v.app.frame();
+  const render::Image shown = v.app.read_pixels();
+  const render::ImageComparison diff = render::compare_images(shown, expected, 2);
+  EXPECT_GE(diff.fraction_within, 0.9995) << "max difference " << diff.max_difference;
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+}
+
+TEST(ViewerApp, WithTheViewThreadScrubbingUploadsNothingAndTheNewestFrameIsShown) {
+  HeadlessViewer v;
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.set_ui_visible(false);
+  v.app.set_view_thread(true);
+  v.app.state().set_frame(0);
+  v.app.frame();
+  v.app.wait_for_view();
+  v.app.frame();
+  const render::Image first = v.app.read_pixels();
+  const int64_t uploads = v.app.upload_count();
+  const int64_t images = v.app.view_images();
+  // Frames handed over faster than they are drawn: the UI thread never waits for them.
+  for (int k = 1; k <= 40; ++k) {
+    v.app.state().set_frame(k);
+    v.app.frame();
+  }
+  v.app.wait_for_view();
+  v.app.frame();
+  EXPECT_GT(v.app.view_images(), images);
+  EXPECT_EQ(v.app.upload_count(), uploads);
+  const render::Image at_40 = v.app.read_pixels();
+  EXPECT_LT(render::compare_images(at_40, first, 8).fraction_within, 0.999);
+  // The same frame drawn directly is the same picture.
+  v.app.set_view_thread(false);
+  v.app.frame();
+  EXPECT_EQ(render::compare_images(v.app.read_pixels(), at_40, 2).fraction_within, 1.0);
+  // An idle viewer draws nothing new.
+  v.app.set_view_thread(true);
+  v.app.frame();
+  v.app.wait_for_view();
+  const int64_t idle = v.app.view_images();
+  for (int i = 0; i < 5; ++i) v.app.frame();
+  v.app.wait_for_view();
+  EXPECT_EQ(v.app.view_images(), idle);
+}
+
+TEST(ViewerApp, AScreenshotWithTheViewThreadShowsItsOwnFrame) {
+  const fs::path dir = temp_dir("thread_shot");
+  {  // one viewer (ImGui session) at a time
+    HeadlessViewer direct;
+    direct.app.state().open_scene(testing::collide_scene());
+    direct.app.state().set_frame(25);
+    direct.app.frame();
+    direct.app.request_screenshot((dir / "direct.png").string());
+    direct.app.frame();
+  }
+
+  HeadlessViewer v;
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.set_view_thread(true);
+  v.app.frame();
+  v.app.state().set_frame(25);  // no wait: the screenshot's frame waits for its own view
+  v.app.request_screenshot((dir / "thread.png").string());
+  v.app.frame();
+  const render::ImageComparison diff =
+      render::compare_images(render::read_png((dir / "thread.png").string()),
+                             render::read_png((dir / "direct.png").string()), 2);
+  EXPECT_GE(diff.fraction_within, 0.9995) << "max difference " << diff.max_difference;
+}
+
+}  // namespace
+}  // namespace dynscope::app::viewer
+
+namespace dynscope::app::viewer {
+namespace {
+
+// The view thread holds what it draws (shared, immutable point series and meshes): opening
+// another document or switching the thread off while it draws the old one is safe, and the next
+// views are of the new document.
+TEST(ViewerApp, OpeningAnotherSceneWhileTheViewThreadDrawsIsSafe) {
+  render::Image expected;
+  {  // one viewer (ImGui session) at a time
+    HeadlessViewer direct;
+    direct.app.set_ui_visible(false);
+    direct.app.state().open_scene(std::string(DYNSCOPE_SOURCE_DIR) +
+                                  "/assets/scenes/collide_0001.h5");
+    direct.app.frame();
+    expected = direct.app.read_pixels();
+  }
+  HeadlessViewer v;
+  v.app.set_ui_visible(false);
+  v.app.set_view_thread(true);
+  for (int round = 0; round < 3; ++round) {
+    v.app.state().open_scene(testing::collide_scene());
+    v.app.frame();  // the thread starts drawing collide_0000
+    v.app.state().open_scene(std::string(DYNSCOPE_SOURCE_DIR) + "/assets/scenes/collide_0001.h5");
+    v.app.frame();
+  }
+  v.app.wait_for_view();
+  v.app.frame();
+  EXPECT_GE(render::compare_images(v.app.read_pixels(), expected, 2).fraction_within, 0.9995);
+  v.app.state().open_scene(testing::collide_scene());
+  v.app.frame();
+  v.app.set_view_thread(false);  // stops the thread while it may be drawing
+  v.app.frame();
+  EXPECT_TRUE(v.app.last_error().empty()) << v.app.last_error();
+}
+
+}  // namespace
+}  // namespace dynscope::app::viewer

@@ -4,7 +4,10 @@
 // threads are not counted): ui_cpu_ms all of it; app_cpu_ms the viewer's own work (input, state,
 // panels, ImGui, viewports: everything outside the renderers); gl_cpu_ms the part inside the
 // renderers' GL calls, where llvmpipe runs the vertex stage on the calling thread (a GPU driver
-// does not); uploads_per_frame buffer uploads while scrubbing (0: nothing is re-sent).
+// does not); uploads_per_frame buffer uploads while scrubbing (0: nothing is re-sent). Rows with
+// view_thread:1 draw the 3D view on ViewerApp's view thread (its own OSMesa context): the UI
+// thread then only hands the view over and shows the newest finished image, and view_fps counts
+// the images the view thread finished per second while the UI ran.
 #include <benchmark/benchmark.h>
 #include <imgui.h>
 
@@ -70,7 +73,7 @@ Rollout synthetic_rollout(int n) {
   return r;
 }
 
-// args: points, point style (0 auto, 1 spheres, 2 discs).
+// args: points, point style (0 auto, 1 spheres, 2 discs), view thread (0 off, 1 on).
 void BM_ScrubRollout(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const char* styles[] = {"auto", "spheres", "discs"};
@@ -80,7 +83,12 @@ void BM_ScrubRollout(benchmark::State& state) {
   ViewerApp app(context(), platform);
   app.state().set_rollout(rollout, "synthetic", nullptr);
   app.state().set_point_style(styles[state.range(1)]);
-  for (int i = 0; i < 3; ++i) app.frame();  // layout and first upload
+  app.set_view_thread(state.range(2) != 0);
+  for (int i = 0; i < 3; ++i) {  // layout and first upload
+    app.frame();
+    app.wait_for_view();
+  }
+  const int64_t images = app.view_images();
   int frame = 0;
   double ui_ms = 0.0, gl_ms = 0.0;
   const int64_t uploads = app.upload_count();
@@ -99,13 +107,21 @@ void BM_ScrubRollout(benchmark::State& state) {
   state.counters["uploads_per_frame"] =
       static_cast<double>(app.upload_count() - uploads) / iterations;
   state.counters["fps"] = benchmark::Counter(iterations, benchmark::Counter::kIsRate);
+  if (app.view_thread()) {
+    // Views the thread finished while the UI ran its frames (each shows the newest one).
+    state.counters["view_fps"] = benchmark::Counter(static_cast<double>(app.view_images() - images),
+                                                    benchmark::Counter::kIsRate);
+  }
 }
 BENCHMARK(BM_ScrubRollout)
-    ->ArgNames({"points", "style"})
-    ->Args({10000, 0})
-    ->Args({100000, 0})
-    ->Args({100000, 1})
-    ->Args({100000, 2})
+    ->ArgNames({"points", "style", "view_thread"})
+    ->Args({10000, 0, 0})
+    ->Args({100000, 0, 0})
+    ->Args({100000, 1, 0})
+    ->Args({100000, 2, 0})
+    ->Args({10000, 0, 1})
+    ->Args({100000, 0, 1})
+    ->Args({100000, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
