@@ -7,6 +7,7 @@
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/model/fused_point_conv.h"
 
 namespace dynscope {
 
@@ -52,17 +53,20 @@ ConvUnitImpl::ConvUnitImpl(const ConvUnitOptions& options) : options_(options) {
 }
 
 torch::Tensor ConvUnitImpl::reduce_input(const torch::Tensor& x) {
-  torch::Tensor r = reduce->forward(x);
-  if (reduce_norm) r = reduce_norm->forward(r);
-  return torch::relu(r);
+  const torch::Tensor r = reduce->forward(x);
+  if (!reduce_norm) return torch::relu(r);
+  return layer_norm_relu(r, reduce_norm->weight, reduce_norm->bias, reduce_norm->options.eps());
 }
 
 torch::Tensor ConvUnitImpl::finish(const torch::Tensor& conv_out,
                                    const torch::Tensor& shortcut_in) {
-  torch::Tensor c = conv_norm ? conv_norm->forward(conv_out) : conv_out;
-  c = expand->forward(torch::relu(c));
+  torch::Tensor c = conv_norm ? layer_norm_relu(conv_out, conv_norm->weight, conv_norm->bias,
+                                                conv_norm->options.eps())
+                              : torch::relu(conv_out);
+  c = expand->forward(c);
   const torch::Tensor s = shortcut ? shortcut->forward(shortcut_in) : shortcut_in;
-  return torch::relu(s + c);
+  // In place: the sum and the ReLU overwrite a linear's output, which no backward reads.
+  return c.add_(s).relu_();
 }
 
 torch::Tensor ConvUnitImpl::forward(const torch::Tensor& x, const torch::Tensor& source,

@@ -121,9 +121,20 @@ void with_width(int64_t j, F&& f) {
   f(Width<0>{j});
 }
 
+// Checks every entry of an int64 index (check_index passed) lies in [-1, n_src). One plain pass
+// over the data: the two LibTorch reductions and their item() calls it replaces cost more than
+// the pass itself, for every convolution of every forward.
 inline void check_index_range(const torch::Tensor& index, int64_t n_src, const char* op) {
   if (index.numel() == 0) return;
-  const int64_t hi = index.max().item<int64_t>(), lo = index.min().item<int64_t>();
+  const torch::Tensor c = index.is_contiguous() ? index : index.contiguous();
+  const int64_t* p = c.data_ptr<int64_t>();
+  const int64_t n = c.numel();
+  int64_t hi = p[0], lo = p[0];
+#pragma omp simd reduction(max : hi) reduction(min : lo)
+  for (int64_t i = 0; i < n; ++i) {
+    hi = p[i] > hi ? p[i] : hi;
+    lo = p[i] < lo ? p[i] : lo;
+  }
   if (hi >= n_src || lo < -1) {
     throw ValueError(op, "index out of range [-1, " + std::to_string(n_src) + "): holds " +
                              std::to_string(lo) + ".." + std::to_string(hi));

@@ -7,6 +7,7 @@
 #include <torch/autograd.h>
 
 #include <atomic>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -347,6 +348,42 @@ struct GatherAddFunction : torch::autograd::Function<GatherAddFunction> {
   }
 };
 
+// Rows [begin, end) of relu(layer_norm(x)): two passes over each row (mean, then the squared
+// deviations, as a two-pass variance is exact to rounding), then the affine map and the ReLU.
+DYNSCOPE_KERNEL_BODY void layer_norm_relu_body(const float* __restrict x, const float* __restrict w,
+                                               const float* __restrict b, float* __restrict y,
+                                               int64_t c, float eps, int64_t begin, int64_t end) {
+  const float inv_c = 1.0f / static_cast<float>(c);
+  for (int64_t r = begin; r < end; ++r) {
+    const float* __restrict xr = x + r * c;
+    float* __restrict yr = y + r * c;
+    float sum = 0.0f;
+#pragma omp simd reduction(+ : sum)
+    for (int64_t i = 0; i < c; ++i) sum += xr[i];
+    const float mean = sum * inv_c;
+    float sq = 0.0f;
+#pragma omp simd reduction(+ : sq)
+    for (int64_t i = 0; i < c; ++i) sq += (xr[i] - mean) * (xr[i] - mean);
+    const float rstd = 1.0f / std::sqrt(sq * inv_c + eps);
+#pragma omp simd
+    for (int64_t i = 0; i < c; ++i) {
+      const float v = (xr[i] - mean) * rstd * w[i] + b[i];
+      yr[i] = v > 0.0f ? v : 0.0f;
+    }
+  }
+}
+
+DYNSCOPE_SIMD_CLONES void layer_norm_relu_simd(const float* x, const float* w, const float* b,
+                                               float* y, int64_t c, float eps, int64_t begin,
+                                               int64_t end) {
+  layer_norm_relu_body(x, w, b, y, c, eps, begin, end);
+}
+
+void layer_norm_relu_baseline(const float* x, const float* w, const float* b, float* y, int64_t c,
+                              float eps, int64_t begin, int64_t end) {
+  layer_norm_relu_body(x, w, b, y, c, eps, begin, end);
+}
+
 std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
 
 // One version per clone of DYNSCOPE_SIMD_CLONES, dispatched by the same rule.
@@ -366,6 +403,34 @@ ConvImplementation conv_implementation() { return g_implementation.load(); }
 
 void set_conv_implementation(ConvImplementation implementation) {
   g_implementation.store(implementation);
+}
+
+torch::Tensor layer_norm_relu(const torch::Tensor& x, const torch::Tensor& weight,
+                              const torch::Tensor& bias, double eps) {
+  const int64_t c = x.dim() == 2 ? x.size(1) : -1;
+  const bool records_grad = torch::GradMode::is_enabled() &&
+                            (x.requires_grad() || weight.requires_grad() || bias.requires_grad());
+  const bool fused = !records_grad && conv_implementation() != ConvImplementation::kUnfused &&
+                     x.scalar_type() == torch::kFloat && weight.scalar_type() == torch::kFloat &&
+                     bias.scalar_type() == torch::kFloat && x.device().is_cpu() && c > 0 &&
+                     weight.numel() == c && bias.numel() == c;
+  if (!fused) return torch::layer_norm(x, {x.size(-1)}, weight, bias, eps).relu_();
+  const torch::Tensor xc = x.contiguous(), wc = weight.contiguous(), bc = bias.contiguous();
+  torch::Tensor y = torch::empty_like(xc);
+  const float* xp = xc.data_ptr<float>();
+  const float* wp = wc.data_ptr<float>();
+  const float* bp = bc.data_ptr<float>();
+  float* yp = y.data_ptr<float>();
+  const bool simd = use_simd_clones();
+  const auto e = static_cast<float>(eps);
+  at::parallel_for(0, x.size(0), 4 * kGrain, [&](int64_t begin, int64_t end) {
+    if (simd) {
+      layer_norm_relu_simd(xp, wp, bp, yp, c, e, begin, end);
+    } else {
+      layer_norm_relu_baseline(xp, wp, bp, yp, c, e, begin, end);
+    }
+  });
+  return y;
 }
 
 torch::Tensor masked_index(const NeighborTensors& neighbors) {

@@ -43,6 +43,13 @@ torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torc
 torch::Tensor gather_add(const torch::Tensor& q, const torch::Tensor& s, const torch::Tensor& r,
                          const torch::Tensor& index);
 
+/// relu(layer_norm(x)) over the last dimension of `x` `[M,C]` with `weight` and `bias` `[C]`, as
+/// torch::layer_norm followed by ReLU. Without gradients to record (no grad mode, or no input
+/// requiring one) and on float32 input, one pass per row in the instruction-set clone of the CPU,
+/// parallel over rows; otherwise, and for ConvImplementation::kUnfused, the two LibTorch ops.
+torch::Tensor layer_norm_relu(const torch::Tensor& x, const torch::Tensor& weight,
+                              const torch::Tensor& bias, double eps);
+
 /// The list's index with −1 wherever its mask is false (the form the fused ops read); prepared
 /// lists are returned as they are (prepare() writes them in that form).
 torch::Tensor masked_index(const NeighborTensors& neighbors);

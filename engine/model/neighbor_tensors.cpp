@@ -20,6 +20,11 @@ torch::Tensor NeighborTensors::has_neighbors() const {
   return has_any.defined() ? has_any : (valid_count() > 0).to(torch::kFloat).unsqueeze(1);
 }
 
+torch::Tensor NeighborTensors::inverse_count() const {
+  if (inv_count.defined()) return inv_count;
+  return has_neighbors() / valid_count().clamp_min(1.0).unsqueeze(1);
+}
+
 torch::Tensor NeighborTensors::relative(const torch::Tensor& query, const torch::Tensor& source,
                                         double scale) const {
   if (rel.defined()) return scale == 1.0 ? rel : rel * static_cast<float>(1.0 / scale);
@@ -40,6 +45,7 @@ void NeighborTensors::prepare(const torch::Tensor& query, const torch::Tensor& s
   rel = relative(query, source, 1.0);
   count = mask.sum(1).to(torch::kFloat);
   has_any = (count > 0).to(torch::kFloat).unsqueeze(1);
+  inv_count = has_any / count.clamp_min(1.0).unsqueeze(1);
 }
 
 NeighborTensors NeighborTensors::to(const torch::Device& device) const {
@@ -50,6 +56,7 @@ NeighborTensors NeighborTensors::to(const torch::Device& device) const {
     t.rel = rel.to(device);
     t.count = count.to(device);
     t.has_any = has_any.to(device);
+    t.inv_count = inv_count.to(device);
   }
   if (gate.defined()) t.gate = gate.to(device);
   return t;

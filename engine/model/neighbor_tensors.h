@@ -16,9 +16,10 @@ namespace dynscope {
 struct NeighborTensors {
   torch::Tensor index;
   torch::Tensor mask;
-  torch::Tensor rel;      ///< Prepared: p_k − p_0 float32 `[M,K,3]`, zero where masked.
-  torch::Tensor count;    ///< Prepared: valid neighbours per row, float32 `[M]`.
-  torch::Tensor has_any;  ///< Prepared: 1 where a row has a valid neighbour, float32 `[M,1]`.
+  torch::Tensor rel;        ///< Prepared: p_k − p_0 float32 `[M,K,3]`, zero where masked.
+  torch::Tensor count;      ///< Prepared: valid neighbours per row, float32 `[M]`.
+  torch::Tensor has_any;    ///< Prepared: 1 where a row has a valid neighbour, float32 `[M,1]`.
+  torch::Tensor inv_count;  ///< Prepared: has_any / valid count (0 without neighbours) `[M,1]`.
   /// Optional per-edge factor float32 `[M,K]` every convolution reading the list multiplies into
   /// that edge's term (undefined: 1). Explanations set it to ones with gradients: ∂E/∂gate of an
   /// edge is the first-order effect of its message on E (gradient × input, the input being the
@@ -32,6 +33,8 @@ struct NeighborTensors {
   torch::Tensor valid_count() const;
   /// 1 where a row has a valid neighbour, else 0, float32 `[M,1]`.
   torch::Tensor has_neighbors() const;
+  /// 1 / valid count per row, 0 for rows without neighbours, float32 `[M,1]` (the mean's scale).
+  torch::Tensor inverse_count() const;
   /// (p_k − p_0) / scale as float32 `[M,K,3]`, zero where masked; `query` `[M,3]` and `source`
   /// `[N,3]` float64 must be the points the list was built on (prepared lists ignore them).
   torch::Tensor relative(const torch::Tensor& query, const torch::Tensor& source,

@@ -73,23 +73,33 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
   if (conv_implementation() == ConvImplementation::kUnfused) {
     return forward_unfused(query, source, features, neighbors);
   }
-  const torch::Tensor rel = neighbors.relative(query, source, options_.position_scale());
   torch::Tensor agg;
-  if (features.scalar_type() == torch::kFloat && rel.scalar_type() == torch::kFloat &&
+  if (features.scalar_type() == torch::kFloat &&
       conv_implementation() != ConvImplementation::kFusedComposed) {
     // The WeightNet and the embedding run per neighbour inside the aggregation (and again in its
-    // backward): no [M,K,·] intermediate is written or saved.
-    agg = point_conv_aggregate_mlp(features, rel, edge_mlps(), neighbors.gate,
-                                   masked_index(neighbors));
-  } else {
-    agg = aggregate_with_autograd(features, rel, neighbors);
+    // backward): no [M,K,·] intermediate is written or saved. Their first layers take the
+    // position scale (W·(r/s) = (W/s)·r), so the list's shared relative positions are read as
+    // they are, not rescaled per convolution.
+    const torch::Tensor rel = neighbors.relative(query, source, 1.0);
+    if (rel.scalar_type() == torch::kFloat) {
+      agg = point_conv_aggregate_mlp(features, rel, edge_mlps(1.0 / options_.position_scale()),
+                                     neighbors.gate, masked_index(neighbors));
+    }
   }
-  if (options_.normalize()) agg = agg / neighbors.valid_count().clamp_min(1.0).unsqueeze(1);
+  if (!agg.defined()) {
+    agg = aggregate_with_autograd(
+        features, neighbors.relative(query, source, options_.position_scale()), neighbors);
+  }
   // Without neighbours there is nothing to convolve: the bias must not leak into the output.
-  return linear->forward(agg) * neighbors.has_neighbors();
+  if (!options_.normalize()) return linear->forward(agg) * neighbors.has_neighbors();
+  // The mean over the neighbours, (W·agg/n + b)·has = (W·agg)·(has/n) + has·b: the scale goes
+  // on the [M,C_out] product instead of the [M,J·C'] aggregate.
+  return torch::mm(agg, linear->weight.t())
+      .mul_(neighbors.inverse_count())
+      .addcmul_(neighbors.has_neighbors(), linear->bias);
 }
 
-EdgeMlps PointConvImpl::edge_mlps() const {
+EdgeMlps PointConvImpl::edge_mlps(double position_factor) const {
   EdgeMlps m;
   auto layer = [](const torch::nn::Sequential& seq, size_t i) {
     return seq->ptr<torch::nn::LinearImpl>(i);
@@ -100,8 +110,10 @@ EdgeMlps PointConvImpl::edge_mlps() const {
   m.b2 = layer(weightnet, 2)->bias;
   m.w3 = layer(weightnet, 4)->weight;
   m.b3 = layer(weightnet, 4)->bias;
+  if (position_factor != 1.0) m.w1 = m.w1 * position_factor;
   if (pos_embed) {
     m.e1 = layer(pos_embed, 0)->weight;
+    if (position_factor != 1.0) m.e1 = m.e1 * position_factor;
     m.c1 = layer(pos_embed, 0)->bias;
     m.e2 = layer(pos_embed, 2)->weight;
     m.c2 = layer(pos_embed, 2)->bias;

@@ -49,8 +49,10 @@ class PointConvImpl : public torch::nn::Module {
                                const NeighborTensors& neighbors);
 
   const PointConvOptions& options() const { return options_; }
-  /// The WeightNet and positional-embedding weights as point_conv_aggregate_mlp reads them.
-  EdgeMlps edge_mlps() const;
+  /// The WeightNet and positional-embedding weights as point_conv_aggregate_mlp reads them, their
+  /// first layers multiplied by `position_factor` (the MLPs of relative positions r then read
+  /// r·position_factor).
+  EdgeMlps edge_mlps(double position_factor = 1.0) const;
 
   torch::nn::Sequential weightnet{nullptr};
   torch::nn::Sequential pos_embed{nullptr};

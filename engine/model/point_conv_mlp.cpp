@@ -370,11 +370,39 @@ DYNSCOPE_SIMD_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float
 
 // What the MLP aggregation's kernels read, prepared once per call: contiguous float inputs and the
 // transposed hidden weights.
+// `t` itself when contiguous (no LibTorch call), else a contiguous copy.
+torch::Tensor contiguous(const torch::Tensor& t) { return t.is_contiguous() ? t : t.contiguous(); }
+
+// The same, undefined for an undefined or empty tensor (the absent gate or embedding).
+torch::Tensor contiguous_or_none(const torch::Tensor& t) {
+  if (!t.defined() || t.numel() == 0) return torch::Tensor();
+  return contiguous(t);
+}
+
+// A linear's weight `[out,in]` as the kernels read it, `[in][out]`, copied by a plain loop: three
+// such small transposes per call were a dozen LibTorch calls per convolution.
+std::vector<float> transposed(const torch::Tensor& w) {
+  const torch::Tensor c = contiguous_or_none(w);
+  if (!c.defined()) return {};
+  const int64_t out = c.size(0), in = c.size(1);
+  const float* p = c.data_ptr<float>();
+  std::vector<float> t(static_cast<size_t>(out * in));
+  for (int64_t o = 0; o < out; ++o) {
+    for (int64_t i = 0; i < in; ++i) t[static_cast<size_t>(i * out + o)] = p[o * in + i];
+  }
+  return t;
+}
+
 struct MlpPrepared {
-  torch::Tensor features, rel, gate, index, w1, b1, w2t, b2, w3t, b3, e1, c1, e2t, c2;
+  torch::Tensor features, rel, gate, index, w1, b1, b2, b3, e1, c1, c2;
+  std::vector<float> w2t, w3t, e2t;  // `[in][out]` copies of w2, w3 and e2
+  int64_t p = 0;                     // embedding width (e2's rows), 0 without one
   InferenceArgs args() const {
     auto ptr = [](const torch::Tensor& t) -> const float* {
       return t.defined() ? t.data_ptr<float>() : nullptr;
+    };
+    auto vec = [](const std::vector<float>& v) -> const float* {
+      return v.empty() ? nullptr : v.data();
     };
     const bool pos = e1.defined();
     return {ptr(features),
@@ -383,18 +411,18 @@ struct MlpPrepared {
             index.data_ptr<int64_t>(),
             index.size(1),
             features.size(1),
-            pos ? e2t.size(1) : 0,
+            p,
             w1.size(0),
             pos ? e1.size(0) : 0,
             ptr(w1),
             ptr(b1),
-            ptr(w2t),
+            vec(w2t),
             ptr(b2),
-            ptr(w3t),
+            vec(w3t),
             ptr(b3),
             ptr(e1),
             ptr(c1),
-            ptr(e2t),
+            vec(e2t),
             ptr(c2)};
   }
 };
@@ -403,26 +431,23 @@ MlpPrepared prepare_mlp(const torch::Tensor& features, const torch::Tensor& gate
                         const std::vector<torch::Tensor>& w, const torch::Tensor& rel,
                         const torch::Tensor& index) {
   // Empty tensors stand for absent ones (the gate, the embedding).
-  auto c = [](const torch::Tensor& t) {
-    return t.defined() && t.numel() > 0 ? t.contiguous() : torch::Tensor();
-  };
-  auto ct = [](const torch::Tensor& t) {
-    return t.defined() && t.numel() > 0 ? t.t().contiguous() : torch::Tensor();
-  };
-  return {features.contiguous(),
-          rel.contiguous(),
-          c(gate),
-          index.contiguous(),
-          w[0].contiguous(),
-          w[1].contiguous(),
-          w[2].t().contiguous(),
-          w[3].contiguous(),
-          w[4].t().contiguous(),
-          w[5].contiguous(),
-          c(w[6]),
-          c(w[7]),
-          ct(w[8]),
-          c(w[9])};
+  MlpPrepared m;
+  m.features = contiguous(features);
+  m.rel = contiguous(rel);
+  m.gate = contiguous_or_none(gate);
+  m.index = contiguous(index);
+  m.w1 = contiguous(w[0]);
+  m.b1 = contiguous(w[1]);
+  m.w2t = transposed(w[2]);
+  m.b2 = contiguous(w[3]);
+  m.w3t = transposed(w[4]);
+  m.b3 = contiguous(w[5]);
+  m.e1 = contiguous_or_none(w[6]);
+  m.c1 = contiguous_or_none(w[7]);
+  m.e2t = transposed(w[8]);
+  m.c2 = contiguous_or_none(w[9]);
+  m.p = m.e1.defined() ? w[8].size(0) : 0;
+  return m;
 }
 
 struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {

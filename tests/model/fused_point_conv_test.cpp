@@ -361,3 +361,42 @@ TEST(FusedPointConvTest, GnnConvMatchesItsUnfusedFormulation) {
 
 }  // namespace
 }  // namespace dynscope
+
+namespace dynscope {
+namespace {
+
+// layer_norm_relu against torch::layer_norm followed by ReLU: without gradients it runs our row
+// kernel (its instruction-set clone and its baseline), with gradients the LibTorch ops, whose
+// gradients flow; rows of a large and a tiny spread, widths of the model (32) and odd ones.
+TEST(FusedPointConvTest, LayerNormReluMatchesLibTorch) {
+  torch::manual_seed(5);
+  for (int64_t c : {32, 24, 7, 2}) {
+    torch::Tensor x = torch::randn({1000, c}) * 3.0 + 1.5;
+    x.slice(0, 0, 10).mul_(1e-4);  // nearly constant rows: the variance is tiny
+    const torch::Tensor w = torch::randn({c}), b = torch::randn({c});
+    const torch::Tensor ref = torch::relu(torch::layer_norm(x, {c}, w, b, 1e-5));
+    {
+      torch::NoGradGuard no_grad;
+      for (ConvImplementation impl :
+           {ConvImplementation::kFused, ConvImplementation::kFusedBaseline}) {
+        set_conv_implementation(impl);
+        const torch::Tensor y = layer_norm_relu(x, w, b, 1e-5);
+        set_conv_implementation(ConvImplementation::kFused);
+        EXPECT_TRUE(torch::allclose(y, ref, 1e-5, 1e-5))
+            << "C " << c << " differs by " << (y - ref).abs().max();
+      }
+    }
+    // With gradients to record: the LibTorch ops, so the gradient is LibTorch's.
+    const torch::Tensor xg = x.clone().requires_grad_(true);
+    const torch::Tensor y = layer_norm_relu(xg, w, b, 1e-5);
+    EXPECT_TRUE(y.requires_grad());
+    EXPECT_TRUE(torch::equal(y.detach(), ref));
+    y.sum().backward();
+    const torch::Tensor xr = x.clone().requires_grad_(true);
+    torch::relu(torch::layer_norm(xr, {c}, w, b, 1e-5)).sum().backward();
+    EXPECT_TRUE(torch::equal(xg.grad(), xr.grad()));
+  }
+}
+
+}  // namespace
+}  // namespace dynscope
