@@ -262,18 +262,22 @@ TEST(ViewerApp, ScreenshotWritesTheWholeWindow) {
 namespace dynscope::app::viewer {
 namespace {
 
+// The window of a viewer drawing on the UI thread with `scene` open at `frame` (its own ImGui
+// session: call it while no other viewer exists).
+render::Image drawn_on_the_ui_thread(const std::string& scene, int frame, bool ui_visible) {
+  HeadlessViewer direct;
+  direct.app.set_ui_visible(ui_visible);
+  direct.app.state().open_scene(scene);
+  direct.app.state().set_frame(frame);
+  direct.app.frame();
+  direct.app.frame();
+  return direct.app.read_pixels();
+}
+
 // With the view thread, a frame shows the newest image the thread finished; once it has drawn the
 // current state, the window is the same picture as drawing on the UI thread.
 TEST(ViewerApp, TheViewThreadShowsWhatDrawingOnTheUiThreadShows) {
-  render::Image expected;
-  {  // one viewer (ImGui session) at a time
-    HeadlessViewer direct;
-    direct.app.state().open_scene(testing::collide_scene());
-    direct.app.state().set_frame(40);
-    direct.app.frame();
-    direct.app.frame();
-    expected = direct.app.read_pixels();
-  }
+  const render::Image expected = drawn_on_the_ui_thread(testing::collide_scene(), 40, true);
 
   HeadlessViewer v;
   v.app.state().open_scene(testing::collide_scene());
@@ -350,32 +354,19 @@ TEST(ViewerApp, AScreenshotWithTheViewThreadShowsItsOwnFrame) {
   EXPECT_GE(diff.fraction_within, 0.9995) << "max difference " << diff.max_difference;
 }
 
-}  // namespace
-}  // namespace dynscope::app::viewer
-
-namespace dynscope::app::viewer {
-namespace {
-
 // The view thread holds what it draws (shared, immutable point series and meshes): opening
 // another document or switching the thread off while it draws the old one is safe, and the next
 // views are of the new document.
 TEST(ViewerApp, OpeningAnotherSceneWhileTheViewThreadDrawsIsSafe) {
-  render::Image expected;
-  {  // one viewer (ImGui session) at a time
-    HeadlessViewer direct;
-    direct.app.set_ui_visible(false);
-    direct.app.state().open_scene(std::string(DYNSCOPE_SOURCE_DIR) +
-                                  "/assets/scenes/collide_0001.h5");
-    direct.app.frame();
-    expected = direct.app.read_pixels();
-  }
+  const std::string other = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/scenes/collide_0001.h5";
+  const render::Image expected = drawn_on_the_ui_thread(other, 0, false);
   HeadlessViewer v;
   v.app.set_ui_visible(false);
   v.app.set_view_thread(true);
   for (int round = 0; round < 3; ++round) {
     v.app.state().open_scene(testing::collide_scene());
     v.app.frame();  // the thread starts drawing collide_0000
-    v.app.state().open_scene(std::string(DYNSCOPE_SOURCE_DIR) + "/assets/scenes/collide_0001.h5");
+    v.app.state().open_scene(other);
     v.app.frame();
   }
   v.app.wait_for_view();
