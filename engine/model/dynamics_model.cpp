@@ -53,7 +53,7 @@ NeighborTensors concat_lists(const std::vector<const NeighborTensors*>& lists,
     k = std::max<int64_t>(k, l->index.size(1));
     prepared = prepared && (l->rows() == 0 || l->rel.defined());
   }
-  std::vector<torch::Tensor> index, mask, rel, count, has_any;
+  std::vector<torch::Tensor> index, mask, rel, count, has_any, inv_count;
   for (size_t b = 0; b < lists.size(); ++b) {
     const NeighborTensors& l = *lists[b];
     const int64_t pad = k - l.index.size(1);
@@ -64,6 +64,7 @@ NeighborTensors concat_lists(const std::vector<const NeighborTensors*>& lists,
       rel.push_back(torch::constant_pad_nd(l.rel, {0, 0, 0, pad}, 0));
       count.push_back(l.count);
       has_any.push_back(l.has_any);
+      inv_count.push_back(l.inv_count);
     }
   }
   NeighborTensors out;
@@ -73,6 +74,7 @@ NeighborTensors concat_lists(const std::vector<const NeighborTensors*>& lists,
     out.rel = torch::cat(rel);
     out.count = torch::cat(count);
     out.has_any = torch::cat(has_any);
+    out.inv_count = torch::cat(inv_count);
   }
   return out;
 }

@@ -1,6 +1,10 @@
 // Conversion of neighbour lists and hierarchies to tensors; neighbour gathers.
 #include "engine/model/neighbor_tensors.h"
 
+#include <ATen/Parallel.h>
+
+#include <algorithm>
+#include <atomic>
 #include <string>
 
 #include "engine/core/error.h"
@@ -86,6 +90,62 @@ NeighborTensors to_tensors(const NeighborList& list, const torch::Device& device
   return t;
 }
 
+NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
+                                 const Points& source, const torch::Device& device) {
+  const int64_t m = list.index.rows(), k = list.index.cols();
+  if (m * k == 0) return to_tensors(list, device);
+  if (list.mask.rows() != m || list.mask.cols() != k || query.rows() != m) {
+    throw ValueError("neighbor_list", "has " + std::to_string(m) + "x" + std::to_string(k) +
+                                          " entries, a " + std::to_string(list.mask.rows()) + "x" +
+                                          std::to_string(list.mask.cols()) + " mask and " +
+                                          std::to_string(query.rows()) + " query points");
+  }
+  const auto on = [](torch::ScalarType t) { return torch::TensorOptions().dtype(t); };
+  NeighborTensors t;
+  t.index = torch::empty({m, k}, on(torch::kInt64));
+  t.mask = torch::empty({m, k}, on(torch::kBool));
+  t.rel = torch::empty({m, k, 3}, on(torch::kFloat));
+  t.count = torch::empty({m}, on(torch::kFloat));
+  t.has_any = torch::empty({m, 1}, on(torch::kFloat));
+  t.inv_count = torch::empty({m, 1}, on(torch::kFloat));
+  int64_t* index = t.index.data_ptr<int64_t>();
+  bool* mask = t.mask.data_ptr<bool>();
+  float* rel = t.rel.data_ptr<float>();
+  float* count = t.count.data_ptr<float>();
+  float* has_any = t.has_any.data_ptr<float>();
+  float* inv_count = t.inv_count.data_ptr<float>();
+  const int32_t* in_index = list.index.data();
+  const uint8_t* in_mask = list.mask.data();
+  const int64_t n_src = source.rows();
+  std::atomic<bool> out_of_range{false};
+  at::parallel_for(0, m, 256, [&](int64_t begin, int64_t end) {
+    for (int64_t r = begin; r < end; ++r) {
+      int64_t valid = 0;
+      for (int64_t j = 0; j < k; ++j) {
+        const int64_t e = r * k + j;
+        const int64_t s = in_index[e];
+        const bool ok = in_mask[e] != 0 && s >= 0 && s < n_src;
+        if (in_mask[e] != 0 && !ok) out_of_range = true;
+        mask[e] = ok;
+        index[e] = ok ? s : -1;
+        for (int a = 0; a < 3; ++a) {
+          rel[3 * e + a] = ok ? static_cast<float>(source(s, a) - query(r, a)) : 0.0f;
+        }
+        valid += ok ? 1 : 0;
+      }
+      const float c = static_cast<float>(valid), has = valid > 0 ? 1.0f : 0.0f;
+      count[r] = c;
+      has_any[r] = has;
+      inv_count[r] = has / std::max(c, 1.0f);
+    }
+  });
+  if (out_of_range) {
+    throw ValueError("neighbor_list", "a valid entry indexes outside the " + std::to_string(n_src) +
+                                          " source points");
+  }
+  return device.is_cpu() ? t : t.to(device);
+}
+
 torch::Tensor points_to_tensor(const Points& points, const torch::Device& device) {
   if (points.rows() == 0) {
     return torch::empty({0, 3}, torch::TensorOptions(torch::kFloat64).device(device));
@@ -108,17 +168,16 @@ HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& dev
     const HierarchyLevel& level = hierarchy.levels[l];
     LevelTensors t;
     t.points = points_to_tensor(level.points, device);
-    t.same = to_tensors(level.same, device);
-    t.relational = to_tensors(level.relational, device);
-    t.down = to_tensors(level.down, device);
-    t.up = to_tensors(level.up, device);
     t.radius = level.radius;
-    t.same.prepare(t.points, t.points);
-    t.relational.prepare(t.points, t.points);
+    t.same = prepared_tensors(level.same, level.points, level.points, device);
+    t.relational = prepared_tensors(level.relational, level.points, level.points, device);
     if (l > 0) {
-      const LevelTensors& finer = out.levels.back();
-      t.down.prepare(t.points, finer.points);
-      t.up.prepare(finer.points, t.points);
+      const Points& finer = hierarchy.levels[l - 1].points;
+      t.down = prepared_tensors(level.down, level.points, finer, device);
+      t.up = prepared_tensors(level.up, finer, level.points, device);
+    } else {
+      t.down = to_tensors(level.down, device);
+      t.up = to_tensors(level.up, device);
     }
     out.levels.push_back(std::move(t));
   }
@@ -127,12 +186,13 @@ HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& dev
     l0.has_mesh = true;
     MeshTensors& mesh = l0.mesh;
     mesh.points = points_to_tensor(hierarchy.mesh.points, device);
-    mesh.face_vertices = to_tensors(hierarchy.mesh.face_vertices, device);
-    mesh.senders = to_tensors(hierarchy.mesh.senders, device);
-    mesh.vertex_points = to_tensors(hierarchy.mesh.vertex_points, device);
-    mesh.face_vertices.prepare(mesh.points, l0.points);
-    mesh.senders.prepare(mesh.points, mesh.points);
-    mesh.vertex_points.prepare(l0.points, mesh.points);
+    const Points& vertices = hierarchy.levels.front().points;
+    const Points& interaction = hierarchy.mesh.points;
+    mesh.face_vertices =
+        prepared_tensors(hierarchy.mesh.face_vertices, interaction, vertices, device);
+    mesh.senders = prepared_tensors(hierarchy.mesh.senders, interaction, interaction, device);
+    mesh.vertex_points =
+        prepared_tensors(hierarchy.mesh.vertex_points, vertices, interaction, device);
   }
   return out;
 }

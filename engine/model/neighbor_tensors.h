@@ -47,6 +47,14 @@ struct NeighborTensors {
 /// Converts a NeighborList; throws ValueError if index and mask shapes differ.
 NeighborTensors to_tensors(const NeighborList& list, const torch::Device& device = torch::kCPU);
 
+/// to_tensors(list) followed by prepare() on `query` `[M,3]` and `source` `[N,3]` (the points the
+/// list was built on), computed in one pass over the list's entries, parallel over rows, with the
+/// same values (relative positions differenced in double, then rounded to float). Lists without
+/// entries are returned unprepared, as prepare() leaves them. Throws ValueError when the sizes
+/// disagree or a valid entry indexes outside `source`.
+NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
+                                 const Points& source, const torch::Device& device = torch::kCPU);
+
 /// Positions `[N,3]` as a float64 tensor (float64 so that relative positions stay exact far from
 /// the origin).
 torch::Tensor points_to_tensor(const Points& points, const torch::Device& device = torch::kCPU);

@@ -1,7 +1,7 @@
-// Model speed: one rollout step split into neighbour search (hierarchy), network and pose fitting,
-// for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the fused ops
-// (kernels cloned per instruction set), on the same ops with their baseline SSE2 kernels and on
-// the unfused reference formulation in the same run; training steps of the default movi-a
+// Model speed: one rollout step split into neighbour search (hierarchy), input tensors, network and
+// pose fitting, for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the
+// fused ops (kernels cloned per instruction set), on the same ops with their baseline SSE2 kernels
+// and on the unfused reference formulation in the same run; training steps of the default movi-a
 // recipe model on a bundled scene; peak memory of training on 10k points.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -105,6 +105,55 @@ void BM_NeighbourSearch(benchmark::State& state) {
   state.SetLabel(to_string(model->config().kind));
 }
 BENCHMARK(BM_NeighbourSearch)->Apply(apply_args);
+
+// The previous conversion of a hierarchy's lists: to_tensors per list, then prepare() on its
+// points (some twenty LibTorch ops per list), for BM_ModelInput's comparison row.
+HierarchyTensors convert_then_prepare(const Hierarchy& h) {
+  HierarchyTensors out;
+  for (size_t l = 0; l < h.levels.size(); ++l) {
+    const HierarchyLevel& level = h.levels[l];
+    LevelTensors t;
+    t.points = points_to_tensor(level.points);
+    t.radius = level.radius;
+    t.same = to_tensors(level.same);
+    t.relational = to_tensors(level.relational);
+    t.down = to_tensors(level.down);
+    t.up = to_tensors(level.up);
+    t.same.prepare(t.points, t.points);
+    t.relational.prepare(t.points, t.points);
+    if (l > 0) {
+      t.down.prepare(t.points, out.levels.back().points);
+      t.up.prepare(out.levels.back().points, t.points);
+    }
+    out.levels.push_back(std::move(t));
+  }
+  return out;
+}
+
+// The model's input tensors from a state and its hierarchy (part of every rollout step), at 3k
+// points. Argument: 0 make_model_input (lists converted and prepared in one pass each), 1 the
+// previous conversion (convert_then_prepare).
+void BM_ModelInput(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const PointState s = make_state(3000);
+  DynamicsModel model(config_for(0));
+  const Hierarchy h = model->build_hierarchy(s);
+  torch::NoGradGuard no_grad;
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      benchmark::DoNotOptimize(make_model_input(s, h));
+    } else {
+      benchmark::DoNotOptimize(convert_then_prepare(h));
+    }
+  }
+  state.SetLabel(state.range(0) == 0 ? "one pass" : "convert, then prepare");
+}
+BENCHMARK(BM_ModelInput)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgName("previous")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Network(benchmark::State& state) {
   set_torch_threads(bench_threads());

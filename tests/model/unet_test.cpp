@@ -101,3 +101,53 @@ TEST(UNetTest, CheckpointKeysAreStable) {
 
 }  // namespace
 }  // namespace dynscope
+
+namespace dynscope {
+namespace {
+
+// Every list of a hierarchy converted in one pass (prepared_tensors, what to_tensors uses) holds
+// what converting it and then calling prepare() on its points computes with LibTorch ops: the
+// same index (−1 where masked), mask, relative positions, counts and scales, exactly.
+TEST(UNetTest, ListsConvertedInOnePassEqualConvertingThenPreparing) {
+  ModelConfig c = testing::tiny_config();
+  const auto scene = testing::make_scene(3, 80, 4);
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, HierarchyOptions::from_config(c));
+  const HierarchyTensors fast = to_tensors(h);
+  auto expect_same = [](const NeighborTensors& a, const NeighborTensors& b,
+                        const std::string& what) {
+    EXPECT_TRUE(torch::equal(a.index, b.index)) << what;
+    EXPECT_TRUE(torch::equal(a.mask, b.mask)) << what;
+    EXPECT_TRUE(torch::equal(a.rel, b.rel)) << what;
+    EXPECT_TRUE(torch::equal(a.count, b.count)) << what;
+    EXPECT_TRUE(torch::equal(a.has_any, b.has_any)) << what;
+    EXPECT_TRUE(torch::equal(a.inverse_count(), b.inverse_count())) << what;
+  };
+  int masked = 0;
+  for (int l = 0; l < h.num_levels(); ++l) {
+    const HierarchyLevel& level = h.levels[static_cast<size_t>(l)];
+    const torch::Tensor points = points_to_tensor(level.points);
+    NeighborTensors same = to_tensors(level.same);
+    same.prepare(points, points);
+    expect_same(fast.levels[static_cast<size_t>(l)].same, same, std::to_string(l) + "/same");
+    NeighborTensors relational = to_tensors(level.relational);
+    relational.prepare(points, points);
+    expect_same(fast.levels[static_cast<size_t>(l)].relational, relational,
+                std::to_string(l) + "/relational");
+    masked += static_cast<int>((level.relational.mask.array() == 0).count());
+    if (l == 0) continue;
+    const torch::Tensor finer = points_to_tensor(h.levels[static_cast<size_t>(l - 1)].points);
+    NeighborTensors down = to_tensors(level.down), up = to_tensors(level.up);
+    down.prepare(points, finer);
+    up.prepare(finer, points);
+    expect_same(fast.levels[static_cast<size_t>(l)].down, down, std::to_string(l) + "/down");
+    expect_same(fast.levels[static_cast<size_t>(l)].up, up, std::to_string(l) + "/up");
+  }
+  EXPECT_GT(masked, 0);  // the relational lists have masked entries to get right
+  // A valid entry outside the source points is an error, not a read out of bounds.
+  NeighborList bad = h.levels[0].same;
+  bad.index(0, 0) = static_cast<int32_t>(h.levels[0].points.rows());
+  EXPECT_THROW(prepared_tensors(bad, h.levels[0].points, h.levels[0].points), ValueError);
+}
+
+}  // namespace
+}  // namespace dynscope
