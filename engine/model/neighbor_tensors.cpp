@@ -49,7 +49,7 @@ void NeighborTensors::prepare(const torch::Tensor& query, const torch::Tensor& s
   rel = relative(query, source, 1.0);
   count = mask.sum(1).to(torch::kFloat);
   has_any = (count > 0).to(torch::kFloat).unsqueeze(1);
-  inv_count = has_any / count.clamp_min(1.0).unsqueeze(1);
+  inv_count = inverse_count();  // from count and has_any, by the one formula
 }
 
 NeighborTensors NeighborTensors::to(const torch::Device& device) const {
