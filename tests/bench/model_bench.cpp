@@ -15,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "engine/core/rng.h"
 #include "engine/geometry/kabsch.h"
 #include "engine/io/scene_file.h"
 #include "engine/model/conv_implementation.h"
@@ -25,36 +24,16 @@
 #include "engine/model/torch_runtime.h"
 #include "engine/train/adam_step.h"
 #include "engine/train/train_options.h"
+#include "tests/bench/bench_state.h"
 
 namespace dynscope {
 namespace {
-
-constexpr int kObjects = 8;
 
 // Threads of the inference rows: 2 (the machine's cores) unless DYNSCOPE_BENCH_THREADS says
 // otherwise, e.g. 1 to measure on a machine whose other core is busy.
 int bench_threads() {
   const char* env = std::getenv("DYNSCOPE_BENCH_THREADS");
   return env ? std::max(1, std::atoi(env)) : 2;
-}
-
-// Points on the surfaces of kObjects unit spheres resting in a row (Physion-like spacing), each
-// moving a little between frames, with the object id per point.
-PointState make_state(int n) {
-  Rng rng(1);
-  Points p(n, 3), prev(n, 3), prev2(n, 3);
-  std::vector<int32_t> ids(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    const int o = i % kObjects;
-    Vec3 d(rng.normal(), rng.normal(), rng.normal());
-    d.normalize();
-    const Vec3 centre(0.25 * o, 0.1 * (o % 2), 0.1);
-    p.row(i) = (centre + 0.1 * d).transpose();
-    prev.row(i) = p.row(i) - Eigen::RowVector3d(0.002, 0, 0.001);
-    prev2.row(i) = prev.row(i) - Eigen::RowVector3d(0.002, 0, 0.001);
-    ids[static_cast<size_t>(i)] = o;
-  }
-  return PointState::from_positions(p, prev, prev2, ids);
 }
 
 ModelConfig config_for(int kind) {
@@ -99,7 +78,7 @@ std::string use_implementation(int64_t arg, const ModelConfig& config) {
 
 void BM_NeighbourSearch(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const PointState s = make_state(static_cast<int>(state.range(0)));
+  const PointState s = make_bench_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
   for (auto _ : state) benchmark::DoNotOptimize(model->build_hierarchy(s));
   state.SetLabel(to_string(model->config().kind));
@@ -135,7 +114,7 @@ HierarchyTensors convert_then_prepare(const Hierarchy& h) {
 // previous conversion (convert_then_prepare).
 void BM_ModelInput(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const PointState s = make_state(3000);
+  const PointState s = make_bench_state(3000);
   DynamicsModel model(config_for(0));
   const Hierarchy h = model->build_hierarchy(s);
   torch::NoGradGuard no_grad;
@@ -157,7 +136,7 @@ BENCHMARK(BM_ModelInput)
 
 void BM_Network(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const PointState s = make_state(static_cast<int>(state.range(0)));
+  const PointState s = make_bench_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
   state.SetLabel(use_implementation(state.range(2), model->config()));
   model->eval();
@@ -169,9 +148,9 @@ void BM_Network(benchmark::State& state) {
 BENCHMARK(BM_Network)->Apply(apply_impl_args);
 
 void BM_PoseFitting(benchmark::State& state) {
-  const PointState s = make_state(static_cast<int>(state.range(0)));
-  std::vector<Points> per_object(kObjects);
-  for (int o = 0; o < kObjects; ++o) {
+  const PointState s = make_bench_state(static_cast<int>(state.range(0)));
+  std::vector<Points> per_object(kBenchObjects);
+  for (int o = 0; o < kBenchObjects; ++o) {
     std::vector<Eigen::Index> rows;
     for (Eigen::Index i = 0; i < s.position.rows(); ++i) {
       if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
@@ -193,13 +172,13 @@ BENCHMARK(BM_PoseFitting)
 // object; frames per second are the inverse of the time per iteration.
 void BM_RolloutStep(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const PointState s = make_state(static_cast<int>(state.range(0)));
+  const PointState s = make_bench_state(static_cast<int>(state.range(0)));
   DynamicsModel model(config_for(static_cast<int>(state.range(1))));
   state.SetLabel(use_implementation(state.range(2), model->config()));
   model->eval();
   for (auto _ : state) {
     const Points next = model->predict_next(s);
-    for (int o = 0; o < kObjects; ++o) {
+    for (int o = 0; o < kBenchObjects; ++o) {
       std::vector<Eigen::Index> rows;
       for (Eigen::Index i = 0; i < next.rows(); ++i) {
         if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
@@ -309,7 +288,7 @@ BENCHMARK(BM_TrainStep)
 // its own (--benchmark_filter=BM_TrainMemory) for a clean number.
 void BM_TrainMemory(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const PointState s = make_state(10000);
+  const PointState s = make_bench_state(10000);
   DynamicsModel model(config_for(0));
   model->train();
   torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(1e-3));
