@@ -19,8 +19,15 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 export_bin=${NETWORK_EXPORT:-build/bin/network_export}
 python=${PYTHON:-/usr/bin/python3}
+usage="usage: tests/bench/eager_compare.sh [ROUNDS] [REPEATS]   (default 3 rounds of 20 passes)"
+case "${1:-}" in -h | --help) echo "$usage"; exit 0 ;; esac
 rounds=${1:-3}
 repeats=${2:-20}
+[[ "$rounds" =~ ^[1-9][0-9]*$ && "$repeats" =~ ^[1-9][0-9]*$ ]] || {
+  echo "eager_compare: ROUNDS and REPEATS must be positive integers" >&2
+  echo "$usage" >&2
+  exit 2
+}
 script=tests/bench/eager_network.py
 [ -x "$export_bin" ] || { echo "eager_compare: $export_bin missing (cmake --build build --target network_export)" >&2; exit 1; }
 "$python" -c "import torch" 2>/dev/null || { echo "eager_compare: $python has no torch (apt-get install python3-torch)" >&2; exit 1; }

@@ -38,25 +38,51 @@ struct Options {
   int threads = 1;
 };
 
+constexpr const char* kUsage =
+    "usage: network_export OUT_DIR [--points N,N] [--repeats R]\n"
+    "Writes OUT_DIR/network_<N>.pt per size (default 3000,10000): the Physion-preset PointConv\n"
+    "network's weights, one input, its outputs and the minimum of R (default 20) forward passes,\n"
+    "fused and unfused, for tests/bench/eager_network.py. Threads: DYNSCOPE_BENCH_THREADS\n"
+    "(default 1).\n";
+
+// A whole decimal number, or invalid_argument naming the option.
+int parse_int(const std::string& text, const char* option) {
+  size_t used = 0;
+  int value = 0;
+  try {
+    value = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) {
+    throw std::invalid_argument(std::string(option) + " expects whole numbers, got '" + text + "'");
+  }
+  return value;
+}
+
 Options parse_options(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
-    if (arg == "--points" && has_value) {
+    if (arg == "-h" || arg == "--help") {
+      std::fputs(kUsage, stdout);
+      std::exit(0);
+    } else if (arg == "--points" && has_value) {
       o.points.clear();
       std::stringstream list(argv[++i]);
-      for (std::string item; std::getline(list, item, ',');) o.points.push_back(std::stoi(item));
+      for (std::string item; std::getline(list, item, ',');)
+        o.points.push_back(parse_int(item, "--points"));
     } else if (arg == "--repeats" && has_value) {
-      o.repeats = std::stoi(argv[++i]);
+      o.repeats = parse_int(argv[++i], "--repeats");
     } else if (arg.rfind("--", 0) != 0 && o.out_dir.empty()) {
       o.out_dir = arg;
     } else {
-      throw std::invalid_argument("unexpected argument '" + arg + "'");
+      throw std::invalid_argument("unexpected argument '" + arg + "'\n" + kUsage);
     }
   }
   if (o.out_dir.empty()) {
-    throw std::invalid_argument("usage: network_export OUT_DIR [--points N,N] [--repeats R]");
+    throw std::invalid_argument(std::string("no OUT_DIR\n") + kUsage);
   }
   if (o.repeats < 1 || o.points.empty() ||
       *std::min_element(o.points.begin(), o.points.end()) < kBenchObjects) {
