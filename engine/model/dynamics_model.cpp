@@ -196,16 +196,16 @@ torch::Tensor DynamicsModelImpl::normalize_target(const torch::Tensor& target) c
   return (target - target_mean_) / target_std_;
 }
 
-Hierarchy DynamicsModelImpl::build_hierarchy(const PointState& state) const {
+Hierarchy DynamicsModelImpl::build_hierarchy(const PointState& state, HierarchyCache* cache) const {
   state.validate();
-  return build_model_hierarchy(state.position, state.object_ids, state.faces, config_);
+  return build_model_hierarchy(state.position, state.object_ids, state.faces, config_, cache);
 }
 
-Points DynamicsModelImpl::predict_next(const PointState& state) {
+Points DynamicsModelImpl::predict_next(const PointState& state, HierarchyCache* cache) {
   state.validate();
   torch::NoGradGuard no_grad;
   const torch::Device device = velocity_mean_.device();
-  const ModelInput input = make_model_input(state, build_hierarchy(state), device);
+  const ModelInput input = make_model_input(state, build_hierarchy(state, cache), device);
   const torch::Tensor delta = predict_delta(input).to(torch::kCPU, torch::kDouble).contiguous();
   Points out = state.position;
   out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);

@@ -56,11 +56,13 @@ class DynamicsModelImpl : public torch::nn::Module {
   torch::Tensor normalize_target(const torch::Tensor& target) const;
 
   /// The hierarchy this model's configuration builds on the state's positions (and, for mesh
-  /// input, its faces). Throws ValueError for a bad state or mesh input without faces.
-  Hierarchy build_hierarchy(const PointState& state) const;
-  /// Builds the hierarchy, runs the model without gradients and returns p̂(t+1) `[N,3]` (double;
-  /// the prediction is added to p(t) in double precision). Throws ValueError on a bad state.
-  Points predict_next(const PointState& state);
+  /// input, its faces). Throws ValueError for a bad state or mesh input without faces. A `cache`
+  /// (one per rollout) reuses what it can certify (HierarchyCache); the result is the same.
+  Hierarchy build_hierarchy(const PointState& state, HierarchyCache* cache = nullptr) const;
+  /// Builds the hierarchy (with `cache` when given), runs the model without gradients and returns
+  /// p̂(t+1) `[N,3]` (double; the prediction is added to p(t) in double precision). Throws
+  /// ValueError on a bad state.
+  Points predict_next(const PointState& state, HierarchyCache* cache = nullptr);
 
   const ModelConfig& config() const { return config_; }
   NormStats stats() const;

@@ -67,6 +67,9 @@ class LevelIndex {
     return knn_all(query.points, *all_, o.k);
   }
 
+  // The level's per-object trees (object-centric levels only).
+  const ObjectIndex* objects() const { return objects_.get(); }
+
   // Other-object kNN within `radius` (object-centric levels only).
   NeighborList relational_list(const HierarchyOptions& o, const HierarchyLevel& query) const {
     return knn_other_objects(query.points, query.object_ids, *objects_, o.k_relational,
@@ -81,7 +84,7 @@ class LevelIndex {
 }  // namespace
 
 Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
-                          const HierarchyOptions& options) {
+                          const HierarchyOptions& options, HierarchyCache* cache) {
   check_options(options);
   if (points.rows() == 0) throw ValueError("points", "no points");
   if (static_cast<Eigen::Index>(object_ids.size()) != points.rows()) {
@@ -94,6 +97,10 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
   h.grid_anchor = Vec3(points.col(0).minCoeff(), points.col(1).minCoeff(), 0.0);
   h.levels.resize(static_cast<size_t>(options.levels));
   std::unique_ptr<LevelIndex> prev_index;
+  // With a cache: the level-0 point each point of the current and the previous level is.
+  const bool cached = cache != nullptr && options.object_centric;
+  std::vector<int32_t> origin, prev_origin;
+  auto slot = [](int l, LevelList list) { return 4 * l + static_cast<int>(list); };
   for (int l = 0; l < options.levels; ++l) {
     HierarchyLevel& level = h.levels[static_cast<size_t>(l)];
     level.radius = options.radius * std::pow(options.growth, l);
@@ -113,11 +120,29 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
       level.object_ids = select_ids(prev.object_ids, level.kept);
     }
     auto index = std::make_unique<LevelIndex>(options, level);
-    if (l > 0) {
-      level.down = prev_index->object_list(options, level);
-      level.up = index->object_list(options, h.levels[static_cast<size_t>(l - 1)]);
+    if (cached) {
+      prev_origin = std::move(origin);
+      origin.resize(level.object_ids.size());
+      for (size_t i = 0; i < origin.size(); ++i) {
+        origin[i] =
+            l == 0 ? static_cast<int32_t>(i) : prev_origin[static_cast<size_t>(level.kept[i])];
+      }
     }
-    level.same = index->object_list(options, level);
+    if (l > 0) {
+      const HierarchyLevel& prev = h.levels[static_cast<size_t>(l - 1)];
+      level.down = cached ? cache->same_object_list(slot(l, LevelList::kDown), level.points,
+                                                    level.object_ids, origin, prev.points,
+                                                    *prev_index->objects(), prev_origin, options.k)
+                          : prev_index->object_list(options, level);
+      level.up = cached ? cache->same_object_list(slot(l, LevelList::kUp), prev.points,
+                                                  prev.object_ids, prev_origin, level.points,
+                                                  *index->objects(), origin, options.k)
+                        : index->object_list(options, prev);
+    }
+    level.same =
+        cached ? cache->same_object_list(slot(l, LevelList::kSame), level.points, level.object_ids,
+                                         origin, level.points, *index->objects(), origin, options.k)
+               : index->object_list(options, level);
     if (options.object_centric && options.point_relational) {
       level.relational = index->relational_list(options, level);
     }
@@ -127,8 +152,9 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
 }
 
 Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t>& object_ids,
-                               const Faces& faces, const HierarchyOptions& options) {
-  Hierarchy h = build_hierarchy(vertices, object_ids, options);
+                               const Faces& faces, const HierarchyOptions& options,
+                               HierarchyCache* cache) {
+  Hierarchy h = build_hierarchy(vertices, object_ids, options, cache);
   h.mesh = build_mesh_interaction(vertices, object_ids, faces, options.interaction_threshold,
                                   options.interaction_lattice, options.k_relational);
   h.has_mesh = true;
@@ -198,13 +224,14 @@ int mesh_list_query_level(MeshList list) { return list == MeshList::kVertexPoint
 int mesh_list_source_level(MeshList list) { return list == MeshList::kFaceVertices ? 0 : -1; }
 
 Hierarchy build_model_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
-                                const Faces& faces, const ModelConfig& config) {
+                                const Faces& faces, const ModelConfig& config,
+                                HierarchyCache* cache) {
   const HierarchyOptions options = HierarchyOptions::from_config(config);
   if (config.input == InputMode::kMesh) {
     if (faces.rows() == 0) throw ValueError("faces", "mesh input needs faces");
-    return build_mesh_hierarchy(points, object_ids, faces, options);
+    return build_mesh_hierarchy(points, object_ids, faces, options, cache);
   }
-  return build_hierarchy(points, object_ids, options);
+  return build_hierarchy(points, object_ids, options, cache);
 }
 
 }  // namespace dynscope

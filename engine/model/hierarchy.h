@@ -7,6 +7,7 @@
 
 #include "engine/core/types.h"
 #include "engine/geometry/neighbors.h"
+#include "engine/model/hierarchy_cache.h"
 #include "engine/model/mesh_interaction.h"
 #include "engine/model/model_config.h"
 
@@ -86,20 +87,24 @@ int mesh_list_query_level(MeshList list);   ///< −1, −1, 0
 int mesh_list_source_level(MeshList list);  ///< 0, −1, −1
 
 /// Builds the hierarchy of `points` `[N,3]` with `object_ids` `[N]`. Throws ValueError on size
-/// mismatch, no points, non-finite values or options out of range.
+/// mismatch, no points, non-finite values or options out of range. With a `cache` (one per
+/// rollout) the level-0 same-object lists of objects that moved rigidly since they were searched
+/// are reused where certified (HierarchyCache); the result is the same as without it.
 Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
-                          const HierarchyOptions& options);
+                          const HierarchyOptions& options, HierarchyCache* cache = nullptr);
 
 /// The same over mesh vertices `[V,3]`, plus the interaction-point lists of `faces` `[F,3]` at
 /// level 0 (options.interaction_threshold, options.interaction_lattice, options.k_relational).
 /// Throws ValueError as build_hierarchy and for face indices out of range.
 Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t>& object_ids,
-                               const Faces& faces, const HierarchyOptions& options);
+                               const Faces& faces, const HierarchyOptions& options,
+                               HierarchyCache* cache = nullptr);
 
 /// The hierarchy a model of `config` builds (one rule for the model, traces and level views):
 /// build_mesh_hierarchy over `faces` for mesh input (ValueError "faces" when there are none),
 /// else build_hierarchy; options from HierarchyOptions::from_config.
 Hierarchy build_model_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
-                                const Faces& faces, const ModelConfig& config);
+                                const Faces& faces, const ModelConfig& config,
+                                HierarchyCache* cache = nullptr);
 
 }  // namespace dynscope

@@ -475,7 +475,11 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
         torch::NoGradGuard no_grad;
         double sum = 0.0, err = 0.0;
         int64_t n = 0;
-        StepPredictor predict = [&model](const PointState& s) { return model->predict_next(s); };
+        // One hierarchy cache across the validation rollouts: each scene re-anchors its objects.
+        HierarchyCache cache;
+        StepPredictor predict = [&model, &cache](const PointState& s) {
+          return model->predict_next(s, &cache);
+        };
         for (const SceneData& d : val) {
           const int t = static_cast<int>(d.frames.size()) / 2;
           const Example e = make_example(

@@ -1,6 +1,7 @@
 // The synthetic scene the model benchmarks run on: points on eight spheres in a row.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -31,6 +32,42 @@ inline PointState make_bench_state(int n) {
     ids[static_cast<size_t>(i)] = o;
   }
   return PointState::from_positions(p, prev, prev2, ids);
+}
+
+/// `steps` consecutive states of make_bench_state(n)'s scene in which every sphere turns and slides
+/// as a rigid body (0.05 rad and up to 0.01 per frame), each point written as R·rest + t the way a
+/// rollout's rigid projection writes it: what a rollout's HierarchyCache sees.
+inline std::vector<PointState> make_bench_rigid_steps(int n, int steps) {
+  const PointState s = make_bench_state(n);
+  Rng rng(2);
+  std::vector<Vec3> centre(kBenchObjects, Vec3::Zero()), axis(kBenchObjects), velocity;
+  std::vector<int> count(kBenchObjects, 0);
+  for (int i = 0; i < n; ++i) {
+    centre[static_cast<size_t>(s.object_ids[static_cast<size_t>(i)])] += s.position.row(i);
+    ++count[static_cast<size_t>(s.object_ids[static_cast<size_t>(i)])];
+  }
+  for (int o = 0; o < kBenchObjects; ++o) {
+    centre[static_cast<size_t>(o)] /= std::max(1, count[static_cast<size_t>(o)]);
+    axis[static_cast<size_t>(o)] = Vec3(rng.normal(), rng.normal(), rng.normal()).normalized();
+    velocity.emplace_back(0.01 * (o % 3 - 1), 0.005 * (o % 2), 0.0);
+  }
+  std::vector<Points> frames;
+  for (int f = 0; f < steps + 2; ++f) {
+    Points p(n, 3);
+    for (int i = 0; i < n; ++i) {
+      const auto o = static_cast<size_t>(s.object_ids[static_cast<size_t>(i)]);
+      const Pose pose{centre[o] + velocity[o] * f, Quat(Eigen::AngleAxisd(0.05 * f, axis[o]))};
+      p.row(i) = pose.apply(Vec3(s.position.row(i).transpose() - centre[o])).transpose();
+    }
+    frames.push_back(std::move(p));
+  }
+  std::vector<PointState> out;
+  for (int f = 0; f < steps; ++f) {
+    out.push_back(PointState::from_positions(frames[static_cast<size_t>(f + 2)],
+                                             frames[static_cast<size_t>(f + 1)],
+                                             frames[static_cast<size_t>(f)], s.object_ids));
+  }
+  return out;
 }
 
 }  // namespace dynscope

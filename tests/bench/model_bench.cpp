@@ -17,11 +17,14 @@
 
 #include "engine/geometry/kabsch.h"
 #include "engine/io/scene_file.h"
+#include "engine/model/checkpoint.h"
 #include "engine/model/conv_implementation.h"
 #include "engine/model/dynamics_model.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
 #include "engine/model/torch_runtime.h"
+#include "engine/rollout/model_points.h"
+#include "engine/rollout/rollout_runner.h"
 #include "engine/train/adam_step.h"
 #include "engine/train/train_options.h"
 #include "tests/bench/bench_state.h"
@@ -84,6 +87,35 @@ void BM_NeighbourSearch(benchmark::State& state) {
   state.SetLabel(to_string(model->config().kind));
 }
 BENCHMARK(BM_NeighbourSearch)->Apply(apply_args);
+
+// Arguments {points, cache}: a rollout's consecutive rigid steps (make_bench_rigid_steps), the
+// PointConv model, the hierarchy built without (0) and with (1) one HierarchyCache for the run.
+void rigid_step_args(benchmark::internal::Benchmark* b) {
+  for (int n : {1000, 3000, 10000}) {
+    for (int cached : {0, 1}) b->Args({n, cached});
+  }
+  b->ArgNames({"points", "cache"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+constexpr int kRigidSteps = 16;
+
+void BM_NeighbourSearchRigidSteps(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const std::vector<PointState> steps =
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), kRigidSteps);
+  DynamicsModel model(config_for(0));
+  HierarchyCache cache;
+  HierarchyCache* use = state.range(1) ? &cache : nullptr;
+  size_t step = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(model->build_hierarchy(steps[step++ % steps.size()], use));
+  }
+  if (use) {
+    state.counters["reused"] = static_cast<double>(cache.reused_rows()) /
+                               static_cast<double>(cache.reused_rows() + cache.searched_rows());
+  }
+}
+BENCHMARK(BM_NeighbourSearchRigidSteps)->Apply(rigid_step_args);
 
 // The previous conversion of a hierarchy's lists: to_tensors per list, then prepare() on its
 // points (some twenty LibTorch ops per list), for BM_ModelInput's comparison row.
@@ -192,6 +224,91 @@ void BM_RolloutStep(benchmark::State& state) {
   set_conv_implementation(ConvImplementation::kFused);
 }
 BENCHMARK(BM_RolloutStep)->Apply(apply_impl_args);
+
+// A whole rollout step (as BM_RolloutStep, fused ops) over consecutive rigid steps, without and
+// with the rollout's HierarchyCache.
+void BM_RolloutStepRigidSteps(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const std::vector<PointState> steps =
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), kRigidSteps);
+  DynamicsModel model(config_for(0));
+  model->eval();
+  HierarchyCache cache;
+  HierarchyCache* use = state.range(1) ? &cache : nullptr;
+  size_t step = 0;
+  for (auto _ : state) {
+    const PointState& s = steps[step++ % steps.size()];
+    const Points next = model->predict_next(s, use);
+    for (int o = 0; o < kBenchObjects; ++o) {
+      std::vector<Eigen::Index> rows;
+      for (Eigen::Index i = 0; i < next.rows(); ++i) {
+        if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
+      }
+      benchmark::DoNotOptimize(
+          fit_rigid_transform(s.position(rows, Eigen::all), next(rows, Eigen::all)));
+    }
+  }
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_RolloutStepRigidSteps)->Apply(rigid_step_args);
+
+// Whole rollouts of the shipped Physion-like model on the bundled sample of each of the seven
+// scenarios (`dynscope rollout` as it runs them: 3 observed frames, rigid projection), without (0)
+// and with (1) the rollout's HierarchyCache; the label gives the hierarchy's share of the time.
+// Unlike make_bench_rigid_steps, most objects here rest for most frames, as in Physion scenes.
+void BM_PhysionRollouts(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const std::string root = DYNSCOPE_SOURCE_DIR;
+  const std::string checkpoint = root + "/assets/models/physion_pointconv_acc.pt";
+  DynamicsModel model = load_checkpoint(checkpoint);
+  model->eval();
+  struct Case {
+    Scene scene;
+    ModelPoints points;
+  };
+  std::vector<Case> cases;
+  for (const char* scenario :
+       {"collide", "contain", "dominoes", "drop", "link", "roll", "support"}) {
+    Case c;
+    c.scene = read_scene(root + "/assets/scenes/" + scenario + "_0000.h5");
+    c.points = build_model_points(c.scene, checkpoint_sampling(checkpoint, model->config()));
+    cases.push_back(std::move(c));
+  }
+  const bool cached = state.range(0) != 0;
+  double hierarchy_s = 0.0;
+  int64_t frames = 0;
+  for (auto _ : state) {
+    for (const Case& c : cases) {
+      HierarchyCache cache;
+      const StepPredictor predict = [&](const PointState& s) {
+        const auto start = std::chrono::steady_clock::now();
+        const Hierarchy h = model->build_hierarchy(s, cached ? &cache : nullptr);
+        hierarchy_s +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        torch::NoGradGuard no_grad;
+        const torch::Tensor delta =
+            model->predict_delta(make_model_input(s, h)).to(torch::kDouble).contiguous();
+        ++frames;
+        return Points(s.position + Eigen::Map<const Points>(delta.data_ptr<double>(), s.size(), 3));
+      };
+      RolloutOptions options;
+      options.observed_frames = 3;
+      benchmark::DoNotOptimize(run_rollout(c.scene, c.points, predict, options));
+    }
+  }
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["hierarchy_ms"] =
+      1e3 * hierarchy_s / static_cast<double>(std::max<int64_t>(1, frames));
+  state.SetLabel(cached ? "cache" : "fresh");
+}
+BENCHMARK(BM_PhysionRollouts)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgName("cache")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The default movi-a recipe's model and a state of the first bundled movi-a scene, as training
 // sees them (the recipe's sampling, frame 12).
