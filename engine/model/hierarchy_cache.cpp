@@ -143,25 +143,14 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
       // come back at the next step is anchored, so objects that keep moving pay no more than a
       // fresh search.
       for_rows(nq, search);
-      Entry e;
-      e.id = id;
-      e.k = k;
-      e.query_origin = std::move(q_origin);
-      e.source_origin = std::move(s_origin);
-      e.anchor = std::move(current);
+      next.emplace_back(id, k, std::move(q_origin), std::move(s_origin), std::move(current));
       searched_rows_ += static_cast<int64_t>(nq);
-      next.push_back(std::move(e));
       continue;
     }
     if (!cached->anchored ||
         static_cast<double>(uncertified) > kMaxUncertifiedFraction * static_cast<double>(nq)) {
       // Search every row afresh with one more neighbour and anchor the list here.
-      Entry e;
-      e.id = id;
-      e.k = k;
-      e.query_origin = std::move(q_origin);
-      e.source_origin = std::move(s_origin);
-      e.anchor = std::move(current);
+      Entry e(id, k, std::move(q_origin), std::move(s_origin), std::move(current));
       e.anchored = true;
       e.width = static_cast<int>(std::min(static_cast<size_t>(k) + 1, ns));
       e.nearest.assign(nq * static_cast<size_t>(e.width), 0);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "engine/core/types.h"
@@ -49,6 +50,13 @@ class HierarchyCache {
   // the list was searched and, per query row, the min(k+1, sources) nearest (local source indices),
   // the distance of the last of them and the smallest gap between consecutive distances.
   struct Entry {
+    Entry(int32_t id_, int k_, std::vector<int32_t> queries, std::vector<int32_t> sources,
+          Points points)
+        : id(id_),
+          k(k_),
+          query_origin(std::move(queries)),
+          source_origin(std::move(sources)),
+          anchor(std::move(points)) {}
     int32_t id = 0;
     int k = 0;
     std::vector<int32_t> query_origin;

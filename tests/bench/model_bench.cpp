@@ -200,6 +200,18 @@ BENCHMARK(BM_PoseFitting)
     ->ArgName("points")
     ->Unit(benchmark::kMillisecond);
 
+// The rollout step's pose fitting: one Kabsch fit per object of make_bench_state's scene.
+void fit_object_poses(const PointState& s, const Points& next) {
+  for (int o = 0; o < kBenchObjects; ++o) {
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index i = 0; i < next.rows(); ++i) {
+      if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
+    }
+    benchmark::DoNotOptimize(
+        fit_rigid_transform(s.position(rows, Eigen::all), next(rows, Eigen::all)));
+  }
+}
+
 // A whole rollout step as `dynscope rollout` runs it: hierarchy, network, then one Kabsch fit per
 // object; frames per second are the inverse of the time per iteration.
 void BM_RolloutStep(benchmark::State& state) {
@@ -210,14 +222,7 @@ void BM_RolloutStep(benchmark::State& state) {
   model->eval();
   for (auto _ : state) {
     const Points next = model->predict_next(s);
-    for (int o = 0; o < kBenchObjects; ++o) {
-      std::vector<Eigen::Index> rows;
-      for (Eigen::Index i = 0; i < next.rows(); ++i) {
-        if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
-      }
-      benchmark::DoNotOptimize(
-          fit_rigid_transform(s.position(rows, Eigen::all), next(rows, Eigen::all)));
-    }
+    fit_object_poses(s, next);
   }
   state.counters["fps"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
@@ -239,14 +244,7 @@ void BM_RolloutStepRigidSteps(benchmark::State& state) {
   for (auto _ : state) {
     const PointState& s = steps[step++ % steps.size()];
     const Points next = model->predict_next(s, use);
-    for (int o = 0; o < kBenchObjects; ++o) {
-      std::vector<Eigen::Index> rows;
-      for (Eigen::Index i = 0; i < next.rows(); ++i) {
-        if (s.object_ids[static_cast<size_t>(i)] == o) rows.push_back(i);
-      }
-      benchmark::DoNotOptimize(
-          fit_rigid_transform(s.position(rows, Eigen::all), next(rows, Eigen::all)));
-    }
+    fit_object_poses(s, next);
   }
   state.counters["fps"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);

@@ -18,15 +18,7 @@ namespace {
 using testing::make_scene;
 using testing::TestScene;
 
-HierarchyOptions options() {
-  HierarchyOptions o;
-  o.levels = 3;
-  o.voxel = 0.08;
-  o.radius = 0.1;
-  o.k = 8;
-  o.k_relational = 8;
-  return o;
-}
+HierarchyOptions options() { return testing::small_hierarchy_options(); }
 
 // A random proper rotation and a translation of up to `reach` in each coordinate.
 Pose random_motion(Rng& rng, double reach) {

@@ -16,15 +16,7 @@ namespace {
 
 using testing::make_scene;
 
-HierarchyOptions small_options() {
-  HierarchyOptions o;
-  o.levels = 3;
-  o.voxel = 0.08;
-  o.radius = 0.1;
-  o.k = 8;
-  o.k_relational = 8;
-  return o;
-}
+HierarchyOptions small_options() { return testing::small_hierarchy_options(); }
 
 // Every valid entry indexes the source and respects the object rule; masked entries are −1.
 void check_list(const NeighborList& nb, const HierarchyLevel& query, const HierarchyLevel& source,

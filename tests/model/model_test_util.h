@@ -6,6 +6,7 @@
 
 #include "engine/core/rng.h"
 #include "engine/core/types.h"
+#include "engine/model/hierarchy.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
 
@@ -49,6 +50,17 @@ inline PointState make_state(const TestScene& scene, uint64_t seed) {
   }
   st.object_ids = scene.ids;
   return st;
+}
+
+/// Hierarchy options for make_scene's boxes: 3 levels, voxel 0.08, radius 0.1, K = 8.
+inline HierarchyOptions small_hierarchy_options() {
+  HierarchyOptions o;
+  o.levels = 3;
+  o.voxel = 0.08;
+  o.radius = 0.1;
+  o.k = 8;
+  o.k_relational = 8;
+  return o;
 }
 
 /// Tiny configuration so that tests run in milliseconds.
