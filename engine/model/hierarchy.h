@@ -88,8 +88,9 @@ int mesh_list_source_level(MeshList list);  ///< 0, −1, −1
 
 /// Builds the hierarchy of `points` `[N,3]` with `object_ids` `[N]`. Throws ValueError on size
 /// mismatch, no points, non-finite values or options out of range. With a `cache` (one per
-/// rollout) the level-0 same-object lists of objects that moved rigidly since they were searched
-/// are reused where certified (HierarchyCache); the result is the same as without it.
+/// rollout) the same-object lists (same, down, up) of objects that moved rigidly since they were
+/// searched over the same points are reused where certified (HierarchyCache); the result is the
+/// same as without it.
 Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
                           const HierarchyOptions& options, HierarchyCache* cache = nullptr);
 

@@ -21,20 +21,7 @@ constexpr double kRoundingSlack = 1e-12;
 // cannot be certified (the object deformed, or other points took the same places).
 constexpr double kMaxUncertifiedFraction = 0.25;
 // Below this many rows a parallel region costs more than it saves.
-constexpr size_t kMinParallelRows = 256;
-
-// Runs body(r, found) for r in [0, n) on the compute threads (each row is independent).
-template <typename Body>
-void for_rows(size_t n, const Body& body) {
-  const int threads = n >= kMinParallelRows ? compute_threads() : 1;
-  const auto rows = static_cast<int64_t>(n);
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-    std::vector<Neighbor> found;
-#pragma omp for schedule(static)
-    for (int64_t r = 0; r < rows; ++r) body(static_cast<size_t>(r), found);
-  }
-}
+constexpr int64_t kMinParallelRows = 256;
 
 // The query rows of each object id, in ascending row order, ordered by id.
 std::vector<std::pair<int32_t, std::vector<Eigen::Index>>> rows_by_object(
@@ -84,8 +71,24 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
   out.mask = MaskMatrix::Zero(query.rows(), k);
   if (slot >= static_cast<int>(slots_.size())) slots_.resize(static_cast<size_t>(slot) + 1);
   std::vector<Entry>& previous = slots_[static_cast<size_t>(slot)];
+
+  // First, object by object: which rows can be reused, and which entry each object keeps.
+  enum class Mode {
+    kSearch,  // new points: plain search, the points remembered
+    kAnchor,  // search with one more neighbour and anchor the entry
+    kReuse,   // certified rows from the entry, the others searched
+  };
+  struct Plan {
+    const ObjectIndex::Object* object;
+    std::vector<Eigen::Index> rows;
+    Points current;  // query points, then source points
+    Mode mode;
+    size_t entry;                    // index into `next`
+    std::vector<uint8_t> certified;  // kReuse only
+  };
+  std::vector<Plan> plans;
   std::vector<Entry> next;
-  for (const auto& [id, rows] : rows_by_object(query_ids)) {
+  for (auto& [id, rows] : rows_by_object(query_ids)) {
     const ObjectIndex::Object* object = sources.find(id);
     if (object == nullptr) continue;  // no source point of this object: rows stay masked
     const size_t nq = rows.size();
@@ -101,91 +104,103 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
       s_origin[j] = source_origin[static_cast<size_t>(s)];
       current.row(static_cast<Eigen::Index>(nq + j)) = source_points.row(s);
     }
-    auto write = [&](size_t i, const int32_t* local, int count) {
-      for (int j = 0; j < count; ++j) {
-        out.index(rows[i], j) = object->global[static_cast<size_t>(local[j])];
-        out.mask(rows[i], j) = 1;
-      }
-    };
-    auto search = [&](size_t i, std::vector<Neighbor>& found) {
-      object->tree.knn(current.row(static_cast<Eigen::Index>(i)).transpose(), k, found);
-      for (size_t j = 0; j < found.size(); ++j) {
-        out.index(rows[i], static_cast<Eigen::Index>(j)) =
-            object->global[static_cast<size_t>(found[j].index)];
-        out.mask(rows[i], static_cast<Eigen::Index>(j)) = 1;
-      }
-    };
-
     Entry* cached = nullptr;
     for (Entry& e : previous) {
       if (e.id == id && e.k == k && e.query_origin == q_origin && e.source_origin == s_origin) {
         cached = &e;
       }
     }
-    // A row is certified when its stored neighbours' consecutive distances are more than twice
-    // the bound apart: then no two of them, nor the last stored one and any farther source, can
-    // have changed places.
-    std::vector<uint8_t> certified(nq, 0);
-    size_t uncertified = nq;
-    if (cached != nullptr && cached->anchored) {
-      const auto [absolute, relative] = motion_bound(cached->anchor, current);
-      uncertified = 0;
-      for (size_t i = 0; i < nq; ++i) {
-        const double bound = absolute + relative * cached->farthest[i];
-        certified[i] = cached->gap[i] > 2.0 * bound ? 1 : 0;
-        uncertified += certified[i] ? 0 : 1;
-      }
-    }
-
+    Plan plan{object, std::move(rows), {}, Mode::kSearch, next.size(), {}};
     if (cached == nullptr) {
       // Points that were not there at the last step (a new object, or the voxel grid kept other
       // points of a moving one): a plain search, remembering the points. Only a list whose points
       // come back at the next step is anchored, so objects that keep moving pay no more than a
       // fresh search.
-      for_rows(nq, search);
-      next.emplace_back(id, k, std::move(q_origin), std::move(s_origin), std::move(current));
+      next.emplace_back(id, k, std::move(q_origin), std::move(s_origin), current);
       searched_rows_ += static_cast<int64_t>(nq);
-      continue;
-    }
-    if (!cached->anchored ||
-        static_cast<double>(uncertified) > kMaxUncertifiedFraction * static_cast<double>(nq)) {
-      // Search every row afresh with one more neighbour and anchor the list here.
-      Entry e(id, k, std::move(q_origin), std::move(s_origin), std::move(current));
-      e.anchored = true;
-      e.width = static_cast<int>(std::min(static_cast<size_t>(k) + 1, ns));
-      e.nearest.assign(nq * static_cast<size_t>(e.width), 0);
-      e.farthest.assign(nq, 0.0);
-      e.gap.assign(nq, kInf);
-      const int listed = std::min(k, e.width);
-      for_rows(nq, [&](size_t i, std::vector<Neighbor>& found) {
-        object->tree.knn(e.anchor.row(static_cast<Eigen::Index>(i)).transpose(), e.width, found);
-        int32_t* nearest = &e.nearest[i * static_cast<size_t>(e.width)];
-        double last = 0.0;
-        for (int j = 0; j < e.width; ++j) {
-          nearest[j] = found[static_cast<size_t>(j)].index;
-          const double d = std::sqrt(found[static_cast<size_t>(j)].sq_dist);
-          if (j > 0) e.gap[i] = std::min(e.gap[i], d - last);
-          last = d;
+    } else {
+      // A row is certified when its stored neighbours' consecutive distances are more than twice
+      // the bound apart: then no two of them, nor the last stored one and any farther source,
+      // can have changed places.
+      size_t uncertified = nq;
+      if (cached->anchored) {
+        const auto [absolute, relative] = motion_bound(cached->anchor, current);
+        plan.certified.assign(nq, 0);
+        uncertified = 0;
+        for (size_t i = 0; i < nq; ++i) {
+          const double bound = absolute + relative * cached->farthest[i];
+          plan.certified[i] = cached->gap[i] > 2.0 * bound ? 1 : 0;
+          uncertified += plan.certified[i] ? 0 : 1;
         }
-        e.farthest[i] = last;
-        write(i, nearest, listed);
-      });
-      searched_rows_ += static_cast<int64_t>(nq);
-      next.push_back(std::move(e));
-      continue;
-    }
-
-    const int listed = std::min(k, cached->width);
-    for_rows(nq, [&](size_t i, std::vector<Neighbor>& found) {
-      if (certified[i]) {
-        write(i, &cached->nearest[i * static_cast<size_t>(cached->width)], listed);
-      } else {
-        search(i, found);
       }
-    });
-    reused_rows_ += static_cast<int64_t>(nq - uncertified);
-    searched_rows_ += static_cast<int64_t>(uncertified);
-    next.push_back(std::move(*cached));
+      if (!cached->anchored ||
+          static_cast<double>(uncertified) > kMaxUncertifiedFraction * static_cast<double>(nq)) {
+        plan.mode = Mode::kAnchor;
+        Entry e(id, k, std::move(q_origin), std::move(s_origin), current);
+        e.anchored = true;
+        e.width = static_cast<int>(std::min(static_cast<size_t>(k) + 1, ns));
+        e.nearest.assign(nq * static_cast<size_t>(e.width), 0);
+        e.farthest.assign(nq, 0.0);
+        e.gap.assign(nq, kInf);
+        next.push_back(std::move(e));
+        searched_rows_ += static_cast<int64_t>(nq);
+      } else {
+        plan.mode = Mode::kReuse;
+        next.push_back(std::move(*cached));
+        reused_rows_ += static_cast<int64_t>(nq - uncertified);
+        searched_rows_ += static_cast<int64_t>(uncertified);
+      }
+    }
+    plan.current = std::move(current);
+    plans.push_back(std::move(plan));
+  }
+
+  // Then every row of every object in one parallel loop (objects are often too small for a
+  // parallel loop of their own).
+  std::vector<int64_t> offset(plans.size() + 1, 0);
+  for (size_t p = 0; p < plans.size(); ++p) {
+    offset[p + 1] = offset[p] + static_cast<int64_t>(plans[p].rows.size());
+  }
+  const int64_t total = offset.back();
+  const int threads = total >= kMinParallelRows ? compute_threads() : 1;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    std::vector<Neighbor> found;
+#pragma omp for schedule(dynamic, 64)
+    for (int64_t r = 0; r < total; ++r) {
+      const auto p = static_cast<size_t>(std::upper_bound(offset.begin(), offset.end(), r) -
+                                         offset.begin() - 1);
+      const Plan& plan = plans[p];
+      Entry& entry = next[plan.entry];
+      const auto i = static_cast<size_t>(r - offset[p]);
+      const Eigen::Index row = plan.rows[i];
+      const std::vector<int32_t>& global = plan.object->global;
+      const Vec3 point = plan.current.row(static_cast<Eigen::Index>(i)).transpose();
+      if (plan.mode == Mode::kReuse && plan.certified[i]) {
+        const int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
+        for (int j = 0; j < std::min(k, entry.width); ++j) {
+          out.index(row, j) = global[static_cast<size_t>(stored[j])];
+          out.mask(row, j) = 1;
+        }
+        continue;
+      }
+      const bool anchor = plan.mode == Mode::kAnchor;
+      plan.object->tree.knn(point, anchor ? entry.width : k, found);
+      for (size_t j = 0; j < found.size() && j < static_cast<size_t>(k); ++j) {
+        out.index(row, static_cast<Eigen::Index>(j)) = global[static_cast<size_t>(found[j].index)];
+        out.mask(row, static_cast<Eigen::Index>(j)) = 1;
+      }
+      if (!anchor) continue;
+      int32_t* nearest = &entry.nearest[i * static_cast<size_t>(entry.width)];
+      double last = 0.0;
+      for (size_t j = 0; j < found.size(); ++j) {
+        nearest[j] = found[j].index;
+        const double d = std::sqrt(found[j].sq_dist);
+        if (j > 0) entry.gap[i] = std::min(entry.gap[i], d - last);
+        last = d;
+      }
+      entry.farthest[i] = last;
+    }
   }
   previous = std::move(next);
   return out;

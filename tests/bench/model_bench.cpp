@@ -253,7 +253,8 @@ BENCHMARK(BM_RolloutStepRigidSteps)->Apply(rigid_step_args);
 
 // Whole rollouts of the shipped Physion-like model on the bundled sample of each of the seven
 // scenarios (`dynscope rollout` as it runs them: 3 observed frames, rigid projection), without (0)
-// and with (1) the rollout's HierarchyCache; the label gives the hierarchy's share of the time.
+// and with (1) the rollout's HierarchyCache; hierarchy_ms is the hierarchy's time per step (the
+// step is predict_next's, split so that the hierarchy can be timed on its own).
 // Unlike make_bench_rigid_steps, most objects here rest for most frames, as in Physion scenes.
 void BM_PhysionRollouts(benchmark::State& state) {
   set_torch_threads(bench_threads());
