@@ -27,7 +27,7 @@ namespace {
 struct TrainArgs {
   std::string recipe;
   std::vector<std::string> data;
-  std::string out, model, target, input, faces, scale, log, lr_schedule;
+  std::string out, model, target, input, faces, scale, log, lr_schedule, noise_mode;
   int epochs = 0, samples = 0, batch = 0, threads = 0, checkpoint_every = 0, width = 0, levels = 0,
       bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0;
   int64_t max_steps = 0;
@@ -66,6 +66,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--lr")) o.lr = a.lr;
   if (given(a, "--lr-schedule")) o.lr_schedule = a.lr_schedule;
   if (given(a, "--noise-std")) o.noise_std = a.noise_std;
+  if (given(a, "--noise-mode")) o.noise_mode = a.noise_mode;
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
@@ -218,6 +219,9 @@ void add_train_command(CLI::App& app) {
   cmd->add_option(
       "--noise-std", a->noise_std,
       "Random-walk noise std on input velocities, scene units per frame (default 3e-4)");
+  cmd->add_option("--noise-mode", a->noise_mode,
+                  "point (default): each point its own noise; object: one draw per object, so "
+                  "objects stay rigid as in a rollout with rigid projection");
   cmd->add_option("--huber-delta", a->huber_delta,
                   "Huber loss transition in target-std units (default 1; 1000 makes it a squared "
                   "error for any realistic error, as the paper's loss in scene units is)");

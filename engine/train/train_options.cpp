@@ -90,6 +90,7 @@ std::string TrainOptions::to_json() const {
   j["lr"] = lr;
   j["lr_schedule"] = lr_schedule;
   j["noise_std"] = noise_std;
+  j["noise_mode"] = noise_mode;
   j["huber_delta"] = huber_delta;
   j["max_steps"] = max_steps;
   j["checkpoint_every"] = checkpoint_every;
@@ -186,6 +187,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     get("lr", o.lr);
     get("lr_schedule", o.lr_schedule);
     get("noise_std", o.noise_std);
+    get("noise_mode", o.noise_mode);
     get("huber_delta", o.huber_delta);
     get("max_steps", o.max_steps);
     get("checkpoint_every", o.checkpoint_every);
@@ -246,6 +248,9 @@ void TrainOptions::resolve(const std::string& scenario) {
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
   in_range("val-frames", val_frames, 1, 1e6, false);
   in_range("noise-std", noise_std, 0, 1e3, false);
+  if (noise_mode != "point" && noise_mode != "object") {
+    throw ValueError("noise-mode", "must be point or object, got '" + noise_mode + "'");
+  }
   in_range("max-steps", static_cast<double>(max_steps), 0, 1e15, false);
   in_range("val-scenes", val_scenes, 0, 1e6, false);
   in_range("threads", threads, 0, kMaxComputeThreads, false);

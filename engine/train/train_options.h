@@ -53,7 +53,10 @@ struct TrainOptions {
   /// "constant", or "cosine": the learning rate of step s of S decays from lr to
   /// kCosineFinalFraction × lr along half a cosine (learning_rate_at).
   std::string lr_schedule = "constant";
-  double noise_std = 3e-4;     ///< Std of the random-walk noise on input velocities (units/frame).
+  double noise_std = 3e-4;  ///< Std of the random-walk noise on input velocities (units/frame).
+  /// "point": every point draws its own noise; "object": one draw per object, shared by its
+  /// points, so every object stays rigid as in a rigid-projected rollout (add_velocity_noise).
+  std::string noise_mode = "point";
   double huber_delta = 1.0;    ///< Huber transition point in target-std units.
   int64_t max_steps = 0;       ///< Stop after this many steps in total (0: all epochs).
   int checkpoint_every = 200;  ///< Write checkpoint and training state every N steps.

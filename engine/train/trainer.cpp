@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <numeric>
@@ -71,7 +72,7 @@ struct Example {
   Points next;
 };
 
-Example make_example(const SceneData& d, int t, double noise_std, Rng* rng) {
+Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng) {
   Example e;
   const Points& p2 = d.frames[static_cast<size_t>(t - 2)];
   const Points& p1 = d.frames[static_cast<size_t>(t - 1)];
@@ -79,17 +80,10 @@ Example make_example(const SceneData& d, int t, double noise_std, Rng* rng) {
   Points v_prev = p1 - p2;
   Points v = p0 - p1;
   Points pos = p0;
-  if (rng && noise_std > 0) {
-    // GNS random walk: the older velocity gets one increment, the newer one two, each with
-    // variance σ²/2, so the noise on v(t) has std σ; positions follow the noisy velocities.
-    const double step_std = noise_std / std::sqrt(2.0);
-    Points n1(v.rows(), 3), n2(v.rows(), 3);
-    for (Eigen::Index i = 0; i < n1.size(); ++i) n1.data()[i] = rng->normal(0.0, step_std);
-    for (Eigen::Index i = 0; i < n2.size(); ++i) n2.data()[i] = rng->normal(0.0, step_std);
-    n2 += n1;
-    v_prev += n1;
-    v += n2;
-    pos = p2 + v_prev + v;
+  if (rng != nullptr && o.noise_std > 0) {
+    add_velocity_noise(o.noise_std, o.noise_mode == "object", d.points.cloud.object_id, &v_prev, &v,
+                       rng);
+    pos = p2 + v_prev + v;  // positions follow the noisy velocities
   }
   e.state.position = pos;
   e.state.velocity = v;
@@ -378,7 +372,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
       global_points += d.points.size();
       if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
       const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
-      Example e = make_example(d, t, o.noise_std, &rng);
+      Example e = make_example(d, t, o, &rng);
       if (b >= mine) examples.push_back(std::move(e));
     }
     PreparedBatch batch;
@@ -483,7 +477,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
         for (const SceneData& d : val) {
           const int t = static_cast<int>(d.frames.size()) / 2;
           const Example e = make_example(
-              d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), 0.0, nullptr);
+              d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), o, nullptr);
           sum += batch_loss(model, prepare_batch(*model, {e}), o.huber_delta).item<double>();
           n += e.state.size() * 3;
           RolloutOptions ro;
@@ -547,6 +541,40 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
 }
 
 }  // namespace
+
+void add_velocity_noise(double noise_std, bool per_object, const std::vector<int32_t>& object_ids,
+                        Points* v_prev, Points* v, Rng* rng) {
+  if (v_prev->rows() != v->rows() || static_cast<size_t>(v->rows()) != object_ids.size()) {
+    throw ValueError("velocity noise", "velocities and object ids differ in length");
+  }
+  // GNS random walk: the older velocity gets one increment, the newer one two, each with
+  // variance σ²/2, so the noise on v(t) has std σ.
+  const double step_std = noise_std / std::sqrt(2.0);
+  auto increment = [&] {
+    return Vec3(rng->normal(0.0, step_std), rng->normal(0.0, step_std), rng->normal(0.0, step_std));
+  };
+  if (!per_object) {
+    Points n1(v->rows(), 3), n2(v->rows(), 3);
+    for (Eigen::Index i = 0; i < n1.size(); ++i) n1.data()[i] = rng->normal(0.0, step_std);
+    for (Eigen::Index i = 0; i < n2.size(); ++i) n2.data()[i] = rng->normal(0.0, step_std);
+    n2 += n1;
+    *v_prev += n1;
+    *v += n2;
+    return;
+  }
+  // One draw per object id, in ascending id order (deterministic whatever the point order).
+  std::map<int32_t, std::pair<Vec3, Vec3>> draws;
+  for (int32_t id : object_ids) draws.emplace(id, std::pair<Vec3, Vec3>());
+  for (auto& [id, d] : draws) {
+    d.first = increment();
+    d.second = d.first + increment();
+  }
+  for (Eigen::Index i = 0; i < v->rows(); ++i) {
+    const auto& d = draws.at(object_ids[static_cast<size_t>(i)]);
+    v_prev->row(i) += d.first.transpose();
+    v->row(i) += d.second.transpose();
+  }
+}
 
 TrainResult train_model(TrainOptions options, bool show_progress, ProcessGroup* group) {
   try {

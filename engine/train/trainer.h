@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/core/types.h"
 #include "engine/train/train_options.h"
 
 namespace dynscope {
@@ -36,6 +37,15 @@ struct TrainResult {
 };
 
 class ProcessGroup;
+class Rng;
+
+/// Training's input noise (GNS random walk): adds to the two input velocities `v_prev` and `v`
+/// `[N,3]` increments of std σ/√2 (one to v_prev, that one plus a second to v), so that the noise
+/// on v has std σ = `noise_std`. `per_object` false: every point draws its own; true: one draw per
+/// object id shared by all its points, so rigid objects stay rigid (their points' noisy
+/// velocities differ by no more than the true ones). Throws ValueError on mismatched sizes.
+void add_velocity_noise(double noise_std, bool per_object, const std::vector<int32_t>& object_ids,
+                        Points* v_prev, Points* v, Rng* rng);
 
 /// Trains a model as `options` says (options.resolve() is applied with the dataset's scenario).
 /// Reads DIR/manifest.json train and val splits, computes normalisation statistics from the

@@ -61,6 +61,9 @@ TEST(TrainOptions, ResolveRefusesValuesOutsideTheirRange) {
   expect_has(resolve_error(R"({"lr": 1e300})"), "lr: must be a finite number in (0, 10]");
   expect_has(resolve_error(R"({"batch": 0})"), "batch");
   expect_has(resolve_error(R"({"noise_std": -0.1})"), "noise-std");
+  expect_has(resolve_error(R"({"noise_mode": "scene"})"),
+             "noise-mode: must be point or object, got 'scene'");
+  EXPECT_EQ(resolve_error(R"({"noise_mode": "object"})"), "");
   expect_has(resolve_error(R"({"epochs": 100000000})"),
              "epochs: must be a finite number in [1, 1e+06]");
   expect_has(resolve_error(R"({"sampling": {"voxel": -0.3}})"), "sampling.voxel");

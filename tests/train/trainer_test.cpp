@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "engine/core/error.h"
+#include "engine/core/rng.h"
 #include "engine/model/checkpoint.h"
 #include "engine/sim/dataset.h"
 #include "tests/train/train_fixtures.h"
@@ -180,6 +181,53 @@ TEST(TrainerTest, TrainsOnSeveralDatasetsOfOneScaleAndRejectsMixedScales) {
     EXPECT_EQ(e.name(), "data");
   }
   fs::remove_all(dir);
+}
+
+// Per-point noise: independent per point with the GNS random walk's stds (σ/√2 on v_prev, σ on
+// v). Per-object noise: the same stds, one draw shared by every point of an object, so a rigid
+// object's points keep their true relative velocities; objects differ and the draw does not
+// depend on the order of the points.
+TEST(TrainerTest, VelocityNoisePerPointAndPerObject) {
+  const double sigma = 0.01;
+  const int n = 4000;
+  std::vector<int32_t> ids(n);
+  for (int i = 0; i < n; ++i) ids[static_cast<size_t>(i)] = (i * 7) % 400;  // 400 objects
+  Points v_true(n, 3);
+  for (int i = 0; i < n; ++i) v_true.row(i) << 0.1 * i / n, -0.02, 0.5;
+
+  auto noise = [&](bool per_object, const std::vector<int32_t>& object_ids, uint64_t seed) {
+    Points v_prev = v_true, v = v_true;
+    Rng rng(seed);
+    add_velocity_noise(sigma, per_object, object_ids, &v_prev, &v, &rng);
+    return std::pair<Points, Points>(v_prev - v_true, v - v_true);
+  };
+  auto std_of = [](const Points& m) { return std::sqrt(m.squaredNorm() / m.size()); };
+
+  const auto [point_prev, point_v] = noise(false, ids, 3);
+  EXPECT_NEAR(std_of(point_prev), sigma / std::sqrt(2.0), 0.03 * sigma);
+  EXPECT_NEAR(std_of(point_v), sigma, 0.03 * sigma);
+  EXPECT_GT((point_v.row(0) - point_v.row(400)).norm(), 0.0);  // same object, own draws
+
+  const auto [object_prev, object_v] = noise(true, ids, 3);
+  for (int i = 400; i < n; ++i) {
+    ASSERT_LT((object_v.row(i) - object_v.row(i % 400)).norm(), 1e-15) << i;
+    ASSERT_LT((object_prev.row(i) - object_prev.row(i % 400)).norm(), 1e-15) << i;
+  }
+  const Points per_object_v = object_v.topRows(400), per_object_prev = object_prev.topRows(400);
+  EXPECT_NEAR(std_of(per_object_prev), sigma / std::sqrt(2.0), 0.1 * sigma);
+  EXPECT_NEAR(std_of(per_object_v), sigma, 0.1 * sigma);
+  // v's noise is v_prev's plus an independent increment of the same std.
+  EXPECT_NEAR(std_of(per_object_v - per_object_prev), sigma / std::sqrt(2.0), 0.1 * sigma);
+
+  // Reversing the points reverses the noise: each object keeps its draw.
+  std::vector<int32_t> reversed(ids.rbegin(), ids.rend());
+  const auto [reversed_prev, reversed_v] = noise(true, reversed, 3);
+  EXPECT_LT((reversed_v.row(n - 1) - object_v.row(0)).norm(), 1e-15);
+
+  Points short_v(3, 3);
+  Points short_prev(3, 3);
+  Rng rng(1);
+  EXPECT_THROW(add_velocity_noise(sigma, true, ids, &short_prev, &short_v, &rng), ValueError);
 }
 
 TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
