@@ -33,7 +33,7 @@ struct TrainArgs {
   int64_t max_steps = 0;
   double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
-  bool resume = false;
+  bool resume = false, keep_epochs = false;
   DistributedArgs dist;
   CLI::App* cmd = nullptr;
 };
@@ -67,6 +67,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--lr-schedule")) o.lr_schedule = a.lr_schedule;
   if (given(a, "--noise-std")) o.noise_std = a.noise_std;
   if (given(a, "--noise-mode")) o.noise_mode = a.noise_mode;
+  if (given(a, "--keep-epochs")) o.keep_epochs = a.keep_epochs;
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
@@ -228,6 +229,9 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--threads", a->threads, "LibTorch threads (0: default)");
   cmd->add_flag("--resume", a->resume, "Continue from --out and its .state file exactly");
   cmd->add_option("--log", a->log, "CSV log, one row per step");
+  cmd->add_flag("--keep-epochs", a->keep_epochs,
+                "Also keep each epoch's checkpoint as X.epochNN.pt (with its recipe), to choose "
+                "among them later on a validation set");
   cmd->add_option("--checkpoint-every", a->checkpoint_every, "Save every N steps (default 200)");
   cmd->add_option("--max-steps", a->max_steps, "Stop after N steps in total (0: all epochs)");
   cmd->add_option("--seed", a->seed, "Seed of initialisation, sampling and noise")

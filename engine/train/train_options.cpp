@@ -99,6 +99,7 @@ std::string TrainOptions::to_json() const {
   j["threads"] = threads;
   j["seed"] = seed;
   j["log"] = log_csv;
+  j["keep_epochs"] = keep_epochs;
   if (!notes_json.empty()) j["notes"] = nlohmann::json::parse(notes_json);
   if (!progress_json.empty()) j["progress"] = nlohmann::json::parse(progress_json);
   return j.dump(2) + "\n";
@@ -188,6 +189,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     get("lr_schedule", o.lr_schedule);
     get("noise_std", o.noise_std);
     get("noise_mode", o.noise_mode);
+    get("keep_epochs", o.keep_epochs);
     get("huber_delta", o.huber_delta);
     get("max_steps", o.max_steps);
     get("checkpoint_every", o.checkpoint_every);
@@ -282,13 +284,26 @@ double learning_rate_at(const TrainOptions& o, int64_t step, int64_t total) {
 
 std::string train_state_path(const std::string& checkpoint) { return checkpoint + ".state"; }
 
-std::string best_checkpoint_path(const std::string& checkpoint) {
+namespace {
+// X.pt -> X + suffix + ".pt"; any other name gets suffix + ".pt" appended.
+std::string sibling_checkpoint(const std::string& checkpoint, const std::string& suffix) {
   const std::string ext = ".pt";
   if (checkpoint.size() > ext.size() &&
       checkpoint.compare(checkpoint.size() - ext.size(), ext.size(), ext) == 0) {
-    return checkpoint.substr(0, checkpoint.size() - ext.size()) + ".best.pt";
+    return checkpoint.substr(0, checkpoint.size() - ext.size()) + suffix + ext;
   }
-  return checkpoint + ".best.pt";
+  return checkpoint + suffix + ext;
+}
+}  // namespace
+
+std::string best_checkpoint_path(const std::string& checkpoint) {
+  return sibling_checkpoint(checkpoint, ".best");
+}
+
+std::string epoch_checkpoint_path(const std::string& checkpoint, int epoch) {
+  char number[16];
+  std::snprintf(number, sizeof number, "%02d", epoch);
+  return sibling_checkpoint(checkpoint, std::string(".epoch") + number);
 }
 std::string recipe_path(const std::string& checkpoint) { return checkpoint + ".recipe.json"; }
 

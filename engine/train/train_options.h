@@ -65,6 +65,7 @@ struct TrainOptions {
   int threads = 0;             ///< torch::set_num_threads (0: LibTorch's default).
   uint64_t seed = 0;           ///< Seeds initialisation, scene order, frames and noise.
   std::string log_csv;         ///< Per-step CSV log ("" = none).
+  bool keep_epochs = false;    ///< Also keep every epoch's checkpoint (epoch_checkpoint_path).
   bool resume = false;         ///< Continue from `out` and its .state file.
 
   /// JSON object with every field (the recipe file format).
@@ -92,6 +93,10 @@ std::string recipe_path(const std::string& checkpoint);
 /// The checkpoint with the lowest validation rollout error of a run writing `checkpoint`: X.pt
 /// becomes X.best.pt (any other name gets ".best.pt" appended); it has its own recipe file.
 std::string best_checkpoint_path(const std::string& checkpoint);
+/// The checkpoint at the end of epoch `epoch` (1-based) of a run writing `checkpoint` with
+/// keep_epochs: X.pt becomes X.epoch03.pt (any other name gets ".epoch03.pt" appended); it has its
+/// own recipe file.
+std::string epoch_checkpoint_path(const std::string& checkpoint, int epoch);
 
 /// Sampling a checkpoint was trained with: its recipe file when present, else the defaults for
 /// the scenario with `input` from the model config. Throws FormatError for a malformed recipe.

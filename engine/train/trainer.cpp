@@ -499,6 +499,11 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
           write_recipe(best);
         }
       }
+      if (leader && o.keep_epochs && step % steps_per_epoch == 0) {
+        const std::string kept = epoch_checkpoint_path(o.out, rep.epoch + 1);
+        save_checkpoint(kept, model);
+        write_recipe(kept);
+      }
       result.epochs.push_back(rep);
       if (leader) {
         log_info("epoch ", rep.epoch + 1, " step ", step, ": train loss ", rep.train_loss,

@@ -86,6 +86,7 @@ TEST(TrainerTest, ACosineRunInChunksEqualsOneSittingAndKeepsItsBestEpoch) {
   EXPECT_EQ(whole.chunks, 1);
 
   TrainOptions chunk = options("chunks.pt");
+  chunk.keep_epochs = true;
   chunk.max_steps = 5;
   EXPECT_EQ(train_model(chunk).steps, 5);
   // A sitting cut short by max_steps still records the whole run as planned (run.sh reads
@@ -132,6 +133,19 @@ TEST(TrainerTest, ACosineRunInChunksEqualsOneSittingAndKeepsItsBestEpoch) {
   at_best.max_steps = best;
   train_model(at_best);
   expect_same_weights(at_best.out, best_path);
+
+  // keep_epochs keeps each epoch's checkpoint, whichever sitting ended the epoch (the second
+  // sitting ended the first epoch at step 8); off by default.
+  EXPECT_EQ(epoch_checkpoint_path(chunk.out, 1), (dir / "chunks.epoch01.pt").string());
+  EXPECT_EQ(epoch_checkpoint_path("run", 12), "run.epoch12.pt");
+  TrainOptions first_epoch = options("first_epoch.pt");
+  first_epoch.max_steps = 8;
+  train_model(first_epoch);
+  expect_same_weights(first_epoch.out, epoch_checkpoint_path(chunk.out, 1));
+  expect_same_weights(straight.out, epoch_checkpoint_path(chunk.out, 2));
+  EXPECT_TRUE(fs::exists(recipe_path(epoch_checkpoint_path(chunk.out, 1))));
+  EXPECT_FALSE(fs::exists(epoch_checkpoint_path(chunk.out, 3)));
+  EXPECT_FALSE(fs::exists(epoch_checkpoint_path(straight.out, 1)));
   fs::remove_all(dir);
 }
 
