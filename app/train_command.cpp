@@ -222,7 +222,8 @@ void add_train_command(CLI::App& app) {
       "Random-walk noise std on input velocities, scene units per frame (default 3e-4)");
   cmd->add_option("--noise-mode", a->noise_mode,
                   "point (default): each point its own noise; object: one draw per object, so "
-                  "objects stay rigid as in a rollout with rigid projection");
+                  "objects stay rigid as in a rollout with rigid projection; centred: each point "
+                  "its own draw less its object's mean, so no object as a whole is displaced");
   cmd->add_option("--huber-delta", a->huber_delta,
                   "Huber loss transition in target-std units (default 1; 1000 makes it a squared "
                   "error for any realistic error, as the paper's loss in scene units is)");

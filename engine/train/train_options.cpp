@@ -250,8 +250,8 @@ void TrainOptions::resolve(const std::string& scenario) {
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
   in_range("val-frames", val_frames, 1, 1e6, false);
   in_range("noise-std", noise_std, 0, 1e3, false);
-  if (noise_mode != "point" && noise_mode != "object") {
-    throw ValueError("noise-mode", "must be point or object, got '" + noise_mode + "'");
+  if (noise_mode != "point" && noise_mode != "object" && noise_mode != "centred") {
+    throw ValueError("noise-mode", "must be point, object or centred, got '" + noise_mode + "'");
   }
   in_range("max-steps", static_cast<double>(max_steps), 0, 1e15, false);
   in_range("val-scenes", val_scenes, 0, 1e6, false);

@@ -55,7 +55,8 @@ struct TrainOptions {
   std::string lr_schedule = "constant";
   double noise_std = 3e-4;  ///< Std of the random-walk noise on input velocities (units/frame).
   /// "point": every point draws its own noise; "object": one draw per object, shared by its
-  /// points, so every object stays rigid as in a rigid-projected rollout (add_velocity_noise).
+  /// points, so every object stays rigid as in a rigid-projected rollout; "centred": per point,
+  /// less the object's mean, so no object as a whole moves (add_velocity_noise).
   std::string noise_mode = "point";
   double huber_delta = 1.0;    ///< Huber transition point in target-std units.
   int64_t max_steps = 0;       ///< Stop after this many steps in total (0: all epochs).

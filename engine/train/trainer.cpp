@@ -18,6 +18,7 @@
 #include <mutex>
 #include <numeric>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 #include "engine/core/error.h"
@@ -81,8 +82,8 @@ Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng)
   Points v = p0 - p1;
   Points pos = p0;
   if (rng != nullptr && o.noise_std > 0) {
-    add_velocity_noise(o.noise_std, o.noise_mode == "object", d.points.cloud.object_id, &v_prev, &v,
-                       rng);
+    add_velocity_noise(o.noise_std, parse_noise_mode(o.noise_mode), d.points.cloud.object_id,
+                       &v_prev, &v, rng);
     pos = p2 + v_prev + v;  // positions follow the noisy velocities
   }
   e.state.position = pos;
@@ -547,7 +548,14 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
 
 }  // namespace
 
-void add_velocity_noise(double noise_std, bool per_object, const std::vector<int32_t>& object_ids,
+NoiseMode parse_noise_mode(const std::string& name) {
+  if (name == "point") return NoiseMode::kPoint;
+  if (name == "object") return NoiseMode::kObject;
+  if (name == "centred") return NoiseMode::kCentred;
+  throw ValueError("noise-mode", "must be point, object or centred, got '" + name + "'");
+}
+
+void add_velocity_noise(double noise_std, NoiseMode mode, const std::vector<int32_t>& object_ids,
                         Points* v_prev, Points* v, Rng* rng) {
   if (v_prev->rows() != v->rows() || static_cast<size_t>(v->rows()) != object_ids.size()) {
     throw ValueError("velocity noise", "velocities and object ids differ in length");
@@ -558,11 +566,27 @@ void add_velocity_noise(double noise_std, bool per_object, const std::vector<int
   auto increment = [&] {
     return Vec3(rng->normal(0.0, step_std), rng->normal(0.0, step_std), rng->normal(0.0, step_std));
   };
-  if (!per_object) {
+  if (mode != NoiseMode::kObject) {
     Points n1(v->rows(), 3), n2(v->rows(), 3);
     for (Eigen::Index i = 0; i < n1.size(); ++i) n1.data()[i] = rng->normal(0.0, step_std);
     for (Eigen::Index i = 0; i < n2.size(); ++i) n2.data()[i] = rng->normal(0.0, step_std);
     n2 += n1;
+    if (mode == NoiseMode::kCentred) {
+      std::map<int32_t, std::tuple<Vec3, Vec3, int64_t>> mean;  // sums of n1, n2 and the count
+      for (Eigen::Index i = 0; i < n1.rows(); ++i) {
+        auto& [s1, s2, count] =
+            mean.try_emplace(object_ids[static_cast<size_t>(i)], Vec3::Zero(), Vec3::Zero(), 0)
+                .first->second;
+        s1 += n1.row(i).transpose();
+        s2 += n2.row(i).transpose();
+        ++count;
+      }
+      for (Eigen::Index i = 0; i < n1.rows(); ++i) {
+        const auto& [s1, s2, count] = mean.at(object_ids[static_cast<size_t>(i)]);
+        n1.row(i) -= s1.transpose() / static_cast<double>(count);
+        n2.row(i) -= s2.transpose() / static_cast<double>(count);
+      }
+    }
     *v_prev += n1;
     *v += n2;
     return;

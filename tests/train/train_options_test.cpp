@@ -62,7 +62,7 @@ TEST(TrainOptions, ResolveRefusesValuesOutsideTheirRange) {
   expect_has(resolve_error(R"({"batch": 0})"), "batch");
   expect_has(resolve_error(R"({"noise_std": -0.1})"), "noise-std");
   expect_has(resolve_error(R"({"noise_mode": "scene"})"),
-             "noise-mode: must be point or object, got 'scene'");
+             "noise-mode: must be point, object or centred, got 'scene'");
   EXPECT_EQ(resolve_error(R"({"noise_mode": "object"})"), "");
   expect_has(resolve_error(R"({"epochs": 100000000})"),
              "epochs: must be a finite number in [1, 1e+06]");

@@ -200,8 +200,8 @@ TEST(TrainerTest, TrainsOnSeveralDatasetsOfOneScaleAndRejectsMixedScales) {
 // Per-point noise: independent per point with the GNS random walk's stds (σ/√2 on v_prev, σ on
 // v). Per-object noise: the same stds, one draw shared by every point of an object, so a rigid
 // object's points keep their true relative velocities; objects differ and the draw does not
-// depend on the order of the points.
-TEST(TrainerTest, VelocityNoisePerPointAndPerObject) {
+// depend on the order of the points. Centred: per point, each object's mean removed.
+TEST(TrainerTest, VelocityNoisePerPointPerObjectAndCentred) {
   const double sigma = 0.01;
   const int n = 4000;
   std::vector<int32_t> ids(n);
@@ -209,20 +209,20 @@ TEST(TrainerTest, VelocityNoisePerPointAndPerObject) {
   Points v_true(n, 3);
   for (int i = 0; i < n; ++i) v_true.row(i) << 0.1 * i / n, -0.02, 0.5;
 
-  auto noise = [&](bool per_object, const std::vector<int32_t>& object_ids, uint64_t seed) {
+  auto noise = [&](NoiseMode mode, const std::vector<int32_t>& object_ids, uint64_t seed) {
     Points v_prev = v_true, v = v_true;
     Rng rng(seed);
-    add_velocity_noise(sigma, per_object, object_ids, &v_prev, &v, &rng);
+    add_velocity_noise(sigma, mode, object_ids, &v_prev, &v, &rng);
     return std::pair<Points, Points>(v_prev - v_true, v - v_true);
   };
   auto std_of = [](const Points& m) { return std::sqrt(m.squaredNorm() / m.size()); };
 
-  const auto [point_prev, point_v] = noise(false, ids, 3);
+  const auto [point_prev, point_v] = noise(NoiseMode::kPoint, ids, 3);
   EXPECT_NEAR(std_of(point_prev), sigma / std::sqrt(2.0), 0.03 * sigma);
   EXPECT_NEAR(std_of(point_v), sigma, 0.03 * sigma);
   EXPECT_GT((point_v.row(0) - point_v.row(400)).norm(), 0.0);  // same object, own draws
 
-  const auto [object_prev, object_v] = noise(true, ids, 3);
+  const auto [object_prev, object_v] = noise(NoiseMode::kObject, ids, 3);
   for (int i = 400; i < n; ++i) {
     ASSERT_LT((object_v.row(i) - object_v.row(i % 400)).norm(), 1e-15) << i;
     ASSERT_LT((object_prev.row(i) - object_prev.row(i % 400)).norm(), 1e-15) << i;
@@ -235,13 +235,29 @@ TEST(TrainerTest, VelocityNoisePerPointAndPerObject) {
 
   // Reversing the points reverses the noise: each object keeps its draw.
   std::vector<int32_t> reversed(ids.rbegin(), ids.rend());
-  const auto [reversed_prev, reversed_v] = noise(true, reversed, 3);
+  const auto [reversed_prev, reversed_v] = noise(NoiseMode::kObject, reversed, 3);
   EXPECT_LT((reversed_v.row(n - 1) - object_v.row(0)).norm(), 1e-15);
+
+  // Centred: per-point draws (10 points per object) whose mean over each object is zero.
+  const auto [centred_prev, centred_v] = noise(NoiseMode::kCentred, ids, 3);
+  for (int object = 0; object < 400; ++object) {
+    Vec3 sum_prev = Vec3::Zero(), sum_v = Vec3::Zero();
+    for (int i = object; i < n; i += 400) {
+      sum_prev += centred_prev.row(i).transpose();
+      sum_v += centred_v.row(i).transpose();
+    }
+    ASSERT_LT(sum_prev.norm() + sum_v.norm(), 1e-13) << object;
+  }
+  EXPECT_NEAR(std_of(centred_v), sigma * std::sqrt(0.9), 0.03 * sigma);
+  EXPECT_GT((centred_v.row(0) - centred_v.row(400)).norm(), 0.0);
+  EXPECT_EQ(parse_noise_mode("centred"), NoiseMode::kCentred);
+  EXPECT_THROW(parse_noise_mode("scene"), ValueError);
 
   Points short_v(3, 3);
   Points short_prev(3, 3);
   Rng rng(1);
-  EXPECT_THROW(add_velocity_noise(sigma, true, ids, &short_prev, &short_v, &rng), ValueError);
+  EXPECT_THROW(add_velocity_noise(sigma, NoiseMode::kObject, ids, &short_prev, &short_v, &rng),
+               ValueError);
 }
 
 TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
