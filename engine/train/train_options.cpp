@@ -12,6 +12,7 @@
 #include "engine/core/error.h"
 #include "engine/core/threads.h"
 #include "engine/io/temp_file.h"
+#include "engine/train/velocity_noise.h"
 
 namespace dynscope {
 namespace {
@@ -250,9 +251,7 @@ void TrainOptions::resolve(const std::string& scenario) {
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
   in_range("val-frames", val_frames, 1, 1e6, false);
   in_range("noise-std", noise_std, 0, 1e3, false);
-  if (noise_mode != "point" && noise_mode != "object" && noise_mode != "centred") {
-    throw ValueError("noise-mode", "must be point, object or centred, got '" + noise_mode + "'");
-  }
+  parse_noise_mode(noise_mode);  // throws ValueError("noise-mode", ...) for other names
   in_range("max-steps", static_cast<double>(max_steps), 0, 1e15, false);
   in_range("val-scenes", val_scenes, 0, 1e6, false);
   in_range("threads", threads, 0, kMaxComputeThreads, false);
