@@ -10,7 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
-source assets/recipes/movi-a-3k/progress.sh
+source assets/recipes/progress.sh
 split=${1:-test}
 runs=assets/runs/movi-a-3k
 out=out/campaign

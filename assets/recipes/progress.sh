@@ -1,4 +1,5 @@
-# Sourced by run.sh and evaluate.sh: a run's progress as its checkpoint's recipe records it.
+# Sourced by assets/recipes/run.sh and the campaigns' evaluate.sh: a run's progress as its
+# checkpoint's recipe records it.
 # run_progress CKPT prints "DONE TOTAL" (steps done, steps planned), or nothing without a recipe.
 run_progress() {
   local recipe="$1.recipe.json"

@@ -1,20 +1,26 @@
 #!/usr/bin/env bash
-# Runs or continues movi-a reproduction-campaign recipes, one after another:
-#   assets/recipes/movi-a-3k/run.sh [RECIPE.json ...]   (default: every recipe of the campaign)
+# Runs or continues campaign recipes (runs trained in sittings), one after another:
+#   assets/recipes/run.sh [RECIPE.json ...]   (default: every recipe of the movi-a campaign,
+#                                             assets/recipes/movi-a-3k/*_sN.json)
+# A recipe's "out" names its checkpoint (under assets/runs/, kept in git with its training state).
 # A run whose training state exists is continued exactly where it stopped (`--resume`); a finished
 # run (its recipe's progress says all steps are done; its state is then no longer kept) is left as
-# it is. Stop at any time: the state is saved every 1000 steps. Two runs at once
+# it is. Stop at any time: the state is saved every `checkpoint_every` steps. Two runs at once
 # (one per core, each with one compute thread) are the fastest use of a 2-core machine.
 set -euo pipefail
-cd "$(dirname "$0")/../../.."
+cd "$(dirname "$0")/../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
-source assets/recipes/movi-a-3k/progress.sh
+source assets/recipes/progress.sh
 recipes=("$@")
 [ ${#recipes[@]} -eq 0 ] && recipes=(assets/recipes/movi-a-3k/*_s[0-9].json)
-mkdir -p assets/runs/movi-a-3k
 for recipe in "${recipes[@]}"; do
   name=$(basename "$recipe" .json)
-  ckpt=assets/runs/movi-a-3k/$name.pt
+  ckpt=$(sed -n 's/^  "out": "\([^"]*\)".*/\1/p' "$recipe" | head -1)
+  if [ -z "$ckpt" ]; then
+    echo "$recipe: no \"out\" checkpoint path" >&2
+    exit 1
+  fi
+  mkdir -p "$(dirname "$ckpt")"
   resume=()
   if run_finished "$ckpt"; then
     echo "$name: finished ($(run_progress "$ckpt" | cut -d' ' -f1) steps)"
