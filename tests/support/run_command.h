@@ -15,9 +15,9 @@ struct CommandResult {
   std::string output;
 };
 
-/// Runs `DYNSCOPE_BINARY args` through the shell (define DYNSCOPE_BINARY as the program path).
-inline CommandResult run_dynscope(const std::string& args) {
-  const std::string command = std::string(DYNSCOPE_BINARY) + " " + args + " 2>&1";
+/// Runs `command` through the shell, stderr merged into the output.
+inline CommandResult run_shell(const std::string& shell_command) {
+  const std::string command = shell_command + " 2>&1";
   CommandResult r;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return r;
@@ -28,5 +28,12 @@ inline CommandResult run_dynscope(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+#ifdef DYNSCOPE_BINARY
+/// Runs `DYNSCOPE_BINARY args` through the shell (define DYNSCOPE_BINARY as the program path).
+inline CommandResult run_dynscope(const std::string& args) {
+  return run_shell(std::string(DYNSCOPE_BINARY) + " " + args);
+}
+#endif
 
 }  // namespace dynscope::test
