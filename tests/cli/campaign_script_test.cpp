@@ -7,9 +7,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
+#include "tests/support/read_file.h"
 #include "tests/support/run_command.h"
 
 namespace dynscope {
@@ -23,13 +23,6 @@ const std::string kScript = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/
 void write_file(const fs::path& path, const std::string& text) {
   std::ofstream out(path);
   out << text;
-}
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 class CampaignScript : public ::testing::Test {
@@ -61,7 +54,7 @@ class CampaignScript : public ::testing::Test {
                      recipe_path.string());
   }
 
-  std::string calls() const { return fs::exists(calls_) ? read_file(calls_) : std::string(); }
+  std::string calls() const { return test::read_bytes(calls_.string()); }
 
   fs::path dir_, stub_, calls_;
 };

@@ -6,9 +6,9 @@
 #include <atomic>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
+#include "tests/support/read_file.h"
 #include "tests/support/run_command.h"
 
 namespace dynscope {
@@ -21,12 +21,7 @@ const std::string kSource = DYNSCOPE_SOURCE_DIR;
 const std::string kScene = kSource + "/assets/scenes/movi-a_0000.h5";
 const std::string kCheckpoint = kSource + "/assets/models/movi-a_pointconv_acc.pt";
 
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::read_bytes;
 
 // A scratch directory holding copies of the bundled scene and checkpoint.
 class CommandChecks : public ::testing::Test {
