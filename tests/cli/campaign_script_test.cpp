@@ -1,7 +1,7 @@
 // Tests of assets/recipes/run.sh, the script that starts or continues campaign recipes in
 // sittings: it must find each recipe's own checkpoint (the top-level "out", not a dataset's),
 // start a new run, resume one with a training state, leave a finished one alone and refuse a
-// recipe without a checkpoint path. `dynscope` is replaced by a stub that records its arguments.
+// recipe without a checkpoint path. `dynscope` is replaced by a script that records its arguments.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -31,10 +31,10 @@ class CampaignScript : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("dynscope_campaign_script_" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    stub_ = dir_ / "dynscope_stub.sh";
+    recorder_ = dir_ / "record_arguments.sh";
     calls_ = dir_ / "calls.txt";
-    write_file(stub_, "#!/bin/sh\necho \"$@\" >> " + calls_.string() + "\n");
-    fs::permissions(stub_, fs::perms::owner_all);
+    write_file(recorder_, "#!/bin/sh\necho \"$@\" >> " + calls_.string() + "\n");
+    fs::permissions(recorder_, fs::perms::owner_all);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -50,13 +50,13 @@ class CampaignScript : public ::testing::Test {
   }
 
   test::CommandResult run(const fs::path& recipe_path) const {
-    return run_shell("DYNSCOPE=" + stub_.string() + " bash " + kScript + " " +
+    return run_shell("DYNSCOPE=" + recorder_.string() + " bash " + kScript + " " +
                      recipe_path.string());
   }
 
   std::string calls() const { return test::read_bytes(calls_.string()); }
 
-  fs::path dir_, stub_, calls_;
+  fs::path dir_, recorder_, calls_;
 };
 
 TEST_F(CampaignScript, StartsANewRunIntoTheRecipesCheckpointDirectory) {
