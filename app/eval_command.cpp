@@ -29,6 +29,7 @@ struct EvalArgs {
   std::string split = "test";
   std::string json;
   int observed = 3;
+  int max_scenes = 0;
   double threshold = 0.0;
   double threshold_fraction = kContactThresholdFraction;
   double voxel = 0.0;
@@ -100,9 +101,11 @@ void run_eval(const EvalArgs& args) {
   require_in_range("--threshold-fraction", args.threshold_fraction, 0, 1e6, true);
   require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);
-  const DatasetSplit split = read_dataset_split(args.data, args.split);
+  if (args.max_scenes != 0) require_int_in_range("--max-scenes", args.max_scenes, 1, 1 << 30);
+  DatasetSplit split = read_dataset_split(args.data, args.split);
   if (split.items.empty())
     throw ValueError("split", args.data + " has no " + args.split + " scenes");
+  if (args.max_scenes > 0) split = evenly_spaced_sample(split, args.max_scenes);
   std::vector<NamedPath> inputs = {{"--checkpoint", args.checkpoint},
                                    {"checkpoint recipe", recipe_path(args.checkpoint)},
                                    {"dataset manifest", args.data + "/manifest.json"}};
@@ -155,6 +158,9 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--split", args->split,
                   "train, val, test, or all (every scene: a held-out dataset generated apart)")
       ->capture_default_str();
+  cmd->add_option("--max-scenes", args->max_scenes,
+                  "Evaluate at most N scenes of the split, evenly spaced over it (0: all), e.g.\n"
+                  "a sample of the training split beside the validation split's numbers");
   cmd->add_option("--json", args->json, "Also write every number as JSON to this file");
   cmd->add_option("--observed", args->observed, "Ground-truth frames before prediction (>= 3)")
       ->capture_default_str();

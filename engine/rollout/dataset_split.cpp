@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "engine/core/error.h"
 #include "engine/io/temp_file.h"
@@ -55,6 +56,21 @@ DatasetSplit read_dataset_split(const std::string& dir, const std::string& split
   } catch (const nlohmann::json::exception& e) {
     throw FormatError(path, "manifest", std::string("missing or malformed field: ") + e.what());
   }
+  return out;
+}
+
+DatasetSplit evenly_spaced_sample(const DatasetSplit& split, int max_scenes) {
+  if (max_scenes < 1) {
+    throw ValueError("max_scenes", "must be >= 1, got " + std::to_string(max_scenes));
+  }
+  const size_t m = split.items.size();
+  const auto n = static_cast<size_t>(max_scenes);
+  if (m <= n) return split;
+  DatasetSplit out = split;
+  out.items.clear();
+  for (size_t i = 0; i < n; ++i) out.items.push_back(split.items[i * m / n]);
+  out.split =
+      split.split + ", " + std::to_string(n) + " of " + std::to_string(m) + " evenly spaced";
   return out;
 }
 

@@ -24,7 +24,15 @@ struct DatasetSplit {
 /// Reads DIR/manifest.json and returns the files of `split` ("all": every scene, in the order
 /// train, val, test; for a dataset generated apart as a held-out set). Throws
 /// ValueError("split", ...) for a split other than train/val/test/all, IoError if the manifest
-/// is missing or unreadable, FormatError naming the field for a malformed manifest or a listed file that does not exist.
+/// is missing or unreadable, FormatError naming the field for a malformed manifest or a listed file
+/// that does not exist.
 DatasetSplit read_dataset_split(const std::string& dir, const std::string& split);
+
+/// At most `max_scenes` scenes of `split`, evenly spaced over it (item ⌊i·M/max_scenes⌋ for
+/// i < max_scenes, in order; M = its size), e.g. a sample of the training split to set beside the
+/// validation split's numbers. A split of at most `max_scenes` scenes is returned as it is;
+/// otherwise `split` becomes "<split>, N of M evenly spaced". Throws ValueError("max_scenes") for
+/// max_scenes < 1.
+DatasetSplit evenly_spaced_sample(const DatasetSplit& split, int max_scenes);
 
 }  // namespace dynscope

@@ -61,6 +61,15 @@ class CommandChecks : public ::testing::Test {
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
+  // A dataset directory "data": the bundled movi-a manifest and its two scenes.
+  void make_dataset() const {
+    fs::create_directories(path("data"));
+    fs::copy_file(kSource + "/assets/scenes/movi-a_manifest.json", path("data/manifest.json"));
+    for (const char* scene : {"movi-a_0000.h5", "movi-a_0001.h5"}) {
+      fs::copy_file(kSource + "/assets/scenes/" + scene, path(std::string("data/") + scene));
+    }
+  }
+
   fs::path dir_;
   std::string scene_, checkpoint_, scene_bytes_, checkpoint_bytes_;
 };
@@ -77,17 +86,27 @@ TEST_F(CommandChecks, OutputsThatWouldOverwriteAnInputAreRefused) {
   expect_refused("trace --checkpoint " + checkpoint_ + " --scene " + scene_ + " --out " + scene_,
                  {"--out", "--scene"});
   expect_refused("view " + scene_ + " --screenshot " + scene_, {"--screenshot", "file"});
-  // A dataset directory: the bundled movi-a manifest and its scenes.
-  fs::create_directories(path("data"));
-  fs::copy_file(kSource + "/assets/scenes/movi-a_manifest.json", path("data/manifest.json"));
-  for (const char* scene : {"movi-a_0000.h5", "movi-a_0001.h5"}) {
-    fs::copy_file(kSource + "/assets/scenes/" + scene, path(std::string("data/") + scene));
-  }
+  make_dataset();
   const std::string eval =
       "eval --checkpoint " + checkpoint_ + " --data " + path("data") + " --split all --json ";
   expect_refused(eval + checkpoint_, {"--json", "--checkpoint"});
   expect_refused(eval + path("data/manifest.json"), {"--json", "dataset manifest"});
   expect_refused(eval + path("data/movi-a_0001.h5"), {"--json", "dataset scene"});
+}
+
+// `eval --max-scenes N` evaluates N scenes of the split, evenly spaced, and says so; a negative
+// count is refused.
+TEST_F(CommandChecks, EvalMaxScenesSamplesTheSplitAndSaysSo) {
+  make_dataset();
+  const std::string eval = "eval --checkpoint " + checkpoint_ + " --data " + path("data") +
+                           " --split all --no-baseline --threads 1";
+  expect_refused(eval + " --max-scenes -1", {"--max-scenes"});
+  const auto r = run_dynscope(eval + " --max-scenes 1 --json " + path("one.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("split all, 1 of 2 evenly spaced"), std::string::npos) << r.output;
+  const std::string json = read_bytes(path("one.json"));
+  EXPECT_NE(json.find("movi-a_0000.h5"), std::string::npos) << json;
+  EXPECT_EQ(json.find("movi-a_0001.h5"), std::string::npos) << "only the first of two scenes";
 }
 
 // An output into a directory that does not exist is refused before any work (one line, no

@@ -57,5 +57,28 @@ TEST(DatasetSplitTest, BadInputsGiveClearErrors) {
   }
 }
 
+TEST(DatasetSplitTest, EvenlySpacedSampleKeepsOrderAndSaysWhatItIs) {
+  DatasetSplit s;
+  s.split = "train";
+  for (int i = 0; i < 10; ++i)
+    s.items.push_back({"d/" + std::to_string(i), std::to_string(i), i % 2});
+  const DatasetSplit four = evenly_spaced_sample(s, 4);
+  ASSERT_EQ(four.items.size(), 4u);
+  const char* expected[] = {"0", "2", "5", "7"};  // ⌊i·10/4⌋
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(four.items[i].file, expected[i]);
+  EXPECT_EQ(four.items[1].outcome, 0);
+  EXPECT_EQ(four.split, "train, 4 of 10 evenly spaced");
+  const DatasetSplit whole = evenly_spaced_sample(s, 10);
+  EXPECT_EQ(whole.items.size(), 10u);
+  EXPECT_EQ(whole.split, "train") << "a split no larger than the sample is left as it is";
+  EXPECT_EQ(evenly_spaced_sample(s, 1).items.at(0).file, "0");
+  try {
+    evenly_spaced_sample(s, 0);
+    FAIL();
+  } catch (const ValueError& e) {
+    EXPECT_EQ(e.name(), "max_scenes");
+  }
+}
+
 }  // namespace
 }  // namespace dynscope
