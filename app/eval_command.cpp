@@ -25,7 +25,7 @@ namespace {
 
 struct EvalArgs {
   std::string checkpoint;
-  std::string data;
+  std::vector<std::string> data;
   std::string split = "test";
   std::string json;
   int observed = 3;
@@ -102,13 +102,13 @@ void run_eval(const EvalArgs& args) {
   require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);
   if (args.max_scenes != 0) require_int_in_range("--max-scenes", args.max_scenes, 1, 1 << 30);
-  DatasetSplit split = read_dataset_split(args.data, args.split);
+  const DatasetSplit split = read_dataset_splits(args.data, args.split, args.max_scenes);
   if (split.items.empty())
-    throw ValueError("split", args.data + " has no " + args.split + " scenes");
-  if (args.max_scenes > 0) split = evenly_spaced_sample(split, args.max_scenes);
+    throw ValueError("split", split.dir + " has no " + args.split + " scenes");
   std::vector<NamedPath> inputs = {{"--checkpoint", args.checkpoint},
-                                   {"checkpoint recipe", recipe_path(args.checkpoint)},
-                                   {"dataset manifest", args.data + "/manifest.json"}};
+                                   {"checkpoint recipe", recipe_path(args.checkpoint)}};
+  for (const std::string& dir : args.data)
+    inputs.push_back({"dataset manifest", dir + "/manifest.json"});
   for (const DatasetItem& item : split.items) inputs.push_back({"dataset scene", item.path});
   require_output_directory("--json", args.json);
   require_distinct_output("--json", args.json, inputs);
@@ -154,13 +154,18 @@ void add_eval_command(CLI::App& app) {
       "gathers one result, identical to a single process's.");
   cmd->add_option("--checkpoint", args->checkpoint, "Checkpoint written by `dynscope train`")
       ->required();
-  cmd->add_option("--data", args->data, "Dataset directory (with manifest.json)")->required();
+  cmd->add_option("--data", args->data,
+                  "Dataset directory (with manifest.json); several (e.g. the seven Physion-like\n"
+                  "scenarios) are evaluated as one set, with contact accuracy per scenario and\n"
+                  "their mean")
+      ->required();
   cmd->add_option("--split", args->split,
                   "train, val, test, or all (every scene: a held-out dataset generated apart)")
       ->capture_default_str();
   cmd->add_option("--max-scenes", args->max_scenes,
-                  "Evaluate at most N scenes of the split, evenly spaced over it (0: all), e.g.\n"
-                  "a sample of the training split beside the validation split's numbers");
+                  "Evaluate at most N scenes of the split (of each --data directory), evenly\n"
+                  "spaced over it (0: all), e.g. a sample of the training split beside the\n"
+                  "validation split's numbers");
   cmd->add_option("--json", args->json, "Also write every number as JSON to this file");
   cmd->add_option("--observed", args->observed, "Ground-truth frames before prediction (>= 3)")
       ->capture_default_str();

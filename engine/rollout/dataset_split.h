@@ -35,4 +35,17 @@ DatasetSplit read_dataset_split(const std::string& dir, const std::string& split
 /// max_scenes < 1.
 DatasetSplit evenly_spaced_sample(const DatasetSplit& split, int max_scenes);
 
+/// The scenes of `split` in every directory of `dirs`, one directory after the other, as one
+/// split (e.g. the seven Physion-like scenarios evaluated as one set); with `max_scenes` > 0 at
+/// most that many per directory (evenly_spaced_sample of each). One directory gives exactly what
+/// read_dataset_split and evenly_spaced_sample give. Several: `dir` and `scenario` list theirs
+/// joined by ", " (scenarios once each), and `split` is named `split` (e.g. "val"), or
+/// "<split>, N of M evenly spaced per directory" when scenes were left out (N, M over all
+/// directories). Throws like read_dataset_split,
+/// ValueError("max_scenes") for max_scenes < 0, and ValueError("data") for no directory, a
+/// directory named twice or a scene file name found in two directories (evaluations are matched
+/// by file name).
+DatasetSplit read_dataset_splits(const std::vector<std::string>& dirs, const std::string& split,
+                                 int max_scenes = 0);
+
 }  // namespace dynscope

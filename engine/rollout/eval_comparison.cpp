@@ -33,6 +33,13 @@ std::string fmt(const char* format, double a, double b = 0.0) {
   return text;
 }
 
+// `text` right-aligned in `width` characters (UTF-8: "±" is one character, two bytes).
+std::string right_aligned(const std::string& text, size_t width) {
+  size_t chars = 0;
+  for (const char ch : text) chars += (static_cast<unsigned char>(ch) & 0xC0) != 0x80;
+  return std::string(width > chars ? width - chars : 0, ' ') + text;
+}
+
 }  // namespace
 
 EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
@@ -79,14 +86,30 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
   c.scenes = static_cast<int>(scene_index.size());
   c.floor_end_error = c.floor_accuracy = c.truth_accuracy = kNaN;
   // The floor and the ceiling do not depend on the model: taken from an evaluation that has them.
+  // The same scenes, so the same labelled scenarios in every evaluation.
+  if (first->contact.scenarios >= 2) {
+    for (const auto& [name, a] : first->scenarios) {
+      if (name != "all" && a.labelled > 0) c.contact_scenarios.push_back(name);
+    }
+  }
+  const size_t n_scenarios = c.contact_scenarios.size();
+  c.floor_scenario_accuracy.assign(n_scenarios, kNaN);
+  c.truth_scenario_accuracy.assign(n_scenarios, kNaN);
   for (const RunEvaluations& run : runs) {
     for (const EvalSummary& s : run.seeds) {
       const ScenarioSummary& all = s.scenarios.at("all");
+      const bool labelled = s.contact.scenarios > 0;
       if (std::isnan(c.floor_end_error) && !all.baseline_curve.empty()) {
         c.floor_end_error = all.baseline_end_error;
-        if (all.labelled > 0) c.floor_accuracy = all.baseline_accuracy;
+        if (labelled) c.floor_accuracy = s.contact.baseline;
+        for (size_t i = 0; i < n_scenarios; ++i)
+          c.floor_scenario_accuracy[i] = s.scenarios.at(c.contact_scenarios[i]).baseline_accuracy;
       }
-      if (std::isnan(c.truth_accuracy) && all.labelled > 0) c.truth_accuracy = all.truth_accuracy;
+      if (std::isnan(c.truth_accuracy) && labelled) {
+        c.truth_accuracy = s.contact.truth;
+        for (size_t i = 0; i < n_scenarios; ++i)
+          c.truth_scenario_accuracy[i] = s.scenarios.at(c.contact_scenarios[i]).truth_accuracy;
+      }
     }
   }
 
@@ -97,18 +120,26 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
     st.label = run.label;
     st.seeds = static_cast<int>(run.seeds.size());
     std::vector<double> ends, accuracies;
+    std::vector<std::vector<double>> scenario_accuracies(n_scenarios);
     std::vector<double> scene_mean(scene_index.size(), 0.0);
     for (const EvalSummary& s : run.seeds) {
       const ScenarioSummary& all = s.scenarios.at("all");
       ends.push_back(all.model_end_error);
       st.labelled = all.labelled;
-      if (all.labelled > 0) accuracies.push_back(all.model_accuracy);
+      if (s.contact.scenarios > 0) accuracies.push_back(s.contact.model);
+      for (size_t i = 0; i < n_scenarios; ++i)
+        scenario_accuracies[i].push_back(s.scenarios.at(c.contact_scenarios[i]).model_accuracy);
       for (const SceneEvaluation& e : s.scenes) {
         scene_mean[scene_index.at(e.file)] += e.model_curve.back() / st.seeds;
       }
     }
     mean_sd(ends, &st.end_error_mean, &st.end_error_sd);
     if (!accuracies.empty()) mean_sd(accuracies, &st.accuracy_mean, &st.accuracy_sd);
+    st.scenario_accuracy_mean.assign(n_scenarios, 0.0);
+    st.scenario_accuracy_sd.assign(n_scenarios, 0.0);
+    for (size_t i = 0; i < n_scenarios; ++i) {
+      mean_sd(scenario_accuracies[i], &st.scenario_accuracy_mean[i], &st.scenario_accuracy_sd[i]);
+    }
     c.runs.push_back(st);
     per_scene.push_back(std::move(scene_mean));
   }
@@ -183,6 +214,32 @@ std::string comparison_table(const EvalComparison& c) {
     out += "ceiling: the contact rule on the ground truth, " +
            fmt("%.1f %%", 100 * c.truth_accuracy) + "\n";
   }
+  if (!c.contact_scenarios.empty()) {
+    out += "contact accuracy above: the mean over " + std::to_string(c.contact_scenarios.size()) +
+           " scenarios; per scenario (%, mean ± sd over seeds):\n";
+    size_t cell = 11;  // "61.1 ± 13.4"
+    for (const std::string& name : c.contact_scenarios) cell = std::max(cell, name.size());
+    std::snprintf(line, sizeof line, "%-*s", w, "run");
+    out += line;
+    for (const std::string& name : c.contact_scenarios) out += " " + right_aligned(name, cell);
+    out += "\n";
+    auto row = [&](const std::string& label, const std::vector<double>& mean,
+                   const std::vector<double>* sd) {
+      std::snprintf(line, sizeof line, "%-*s", w, label.c_str());
+      out += line;
+      for (size_t i = 0; i < mean.size(); ++i) {
+        const std::string v = std::isnan(mean[i]) ? "-"
+                              : sd ? fmt("%.1f ± %.1f", 100 * mean[i], 100 * (*sd)[i])
+                                   : fmt("%.1f", 100 * mean[i]);
+        out += " " + right_aligned(v, cell);
+      }
+      out += "\n";
+    };
+    for (const RunStats& r : c.runs)
+      row(r.label, r.scenario_accuracy_mean, &r.scenario_accuracy_sd);
+    if (!std::isnan(c.floor_accuracy)) row("floor", c.floor_scenario_accuracy, nullptr);
+    row("ceiling", c.truth_scenario_accuracy, nullptr);
+  }
   if (c.pairs.empty()) return out;
   out +=
       "\npaired per scene (A - B, each scene's end error averaged over seeds first; ± standard "
@@ -222,7 +279,17 @@ std::string comparison_to_json(const EvalComparison& c) {
       run["contact_accuracy_mean"] = r.accuracy_mean;
       run["contact_accuracy_sd"] = r.accuracy_sd;
     }
+    for (size_t i = 0; i < c.contact_scenarios.size(); ++i) {
+      run["scenario_contact_accuracy"][c.contact_scenarios[i]] = {
+          {"mean", r.scenario_accuracy_mean[i]}, {"sd", r.scenario_accuracy_sd[i]}};
+    }
     j["runs"].push_back(run);
+  }
+  for (size_t i = 0; i < c.contact_scenarios.size(); ++i) {
+    j["scenario_floor_contact_accuracy"][c.contact_scenarios[i]] =
+        num(c.floor_scenario_accuracy[i]);
+    j["scenario_truth_contact_accuracy"][c.contact_scenarios[i]] =
+        num(c.truth_scenario_accuracy[i]);
   }
   for (const PairedDifference& p : c.pairs) {
     j["pairs"].push_back(

@@ -24,7 +24,10 @@ struct RunStats {
   int seeds = 0;
   double end_error_mean = 0.0, end_error_sd = 0.0;
   int labelled = 0;  ///< Scenes with a contact label (0: no contact accuracy).
+  /// Contact accuracy (each evaluation's mean over its scenarios, ContactMean) over seeds.
   double accuracy_mean = 0.0, accuracy_sd = 0.0;
+  /// Per scenario of EvalComparison::contact_scenarios: contact accuracy over seeds.
+  std::vector<double> scenario_accuracy_mean, scenario_accuracy_sd;
 };
 
 /// Run A against run B scene by scene: each scene's end error averaged over each run's seeds,
@@ -47,6 +50,10 @@ struct EvalComparison {
   double floor_end_error = 0.0;  ///< The constant-velocity baseline's (NaN if none has it).
   double floor_accuracy = 0.0;   ///< Its contact accuracy (NaN if no scene is labelled).
   double truth_accuracy = 0.0;   ///< The threshold rule on the ground truth (NaN likewise).
+  /// The labelled scenarios when there are two or more (the Physion table shape), with the
+  /// floor's and the ceiling's accuracy in each.
+  std::vector<std::string> contact_scenarios;
+  std::vector<double> floor_scenario_accuracy, truth_scenario_accuracy;
   std::vector<RunStats> runs;
   std::vector<PairedDifference> pairs;  ///< Every pair (i < j) of runs, in the order given.
 };

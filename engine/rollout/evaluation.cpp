@@ -135,7 +135,19 @@ EvalSummary summarize_evaluation(const DatasetSplit& split, const EvalOptions& o
     accumulate(out.scenarios["all"], e);
     out.scenes.push_back(std::move(e));
   }
-  for (auto& [name, s] : out.scenarios) finish(s);
+  for (auto& [name, s] : out.scenarios) {
+    finish(s);
+    if (name == "all" || s.labelled == 0) continue;
+    ++out.contact.scenarios;
+    out.contact.model += s.model_accuracy;
+    out.contact.baseline += s.baseline_accuracy;
+    out.contact.truth += s.truth_accuracy;
+  }
+  if (out.contact.scenarios > 0) {
+    out.contact.model /= out.contact.scenarios;
+    out.contact.baseline /= out.contact.scenarios;
+    out.contact.truth /= out.contact.scenarios;
+  }
   return out;
 }
 
@@ -199,6 +211,12 @@ std::string eval_to_json(const EvalSummary& s) {
   j["sampling_voxel"] = s.voxel;
   j["contact_threshold"] = s.threshold;
   j["baseline"] = kBaselineDescription;
+  if (s.contact.scenarios > 0) {
+    j["contact_scenario_mean"] = {{"scenarios", s.contact.scenarios},
+                                  {"contact_accuracy", s.contact.model},
+                                  {"baseline_contact_accuracy", s.contact.baseline},
+                                  {"truth_contact_accuracy", s.contact.truth}};
+  }
   for (const auto& [name, a] : s.scenarios) {
     j["scenarios"][name] = {{"scenes", a.scenes},
                             {"end_error", a.model_end_error},
@@ -292,15 +310,30 @@ std::string eval_table(const EvalSummary& s) {
   std::snprintf(line, sizeof line, "%-10s %6s %12s %12s %8s %9s %9s %9s\n", "scenario", "scenes",
                 "end error", "baseline", "labels", "contact", "baseline", "truth");
   out += line;
+  auto percent = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f%%", 100 * v);
+    return std::string(text);
+  };
+  // Without the baseline (--no-baseline) its columns are "-", not zeros.
+  const bool baseline = !s.scenarios.empty() && !s.scenarios.begin()->second.baseline_curve.empty();
   for (const auto& [name, a] : s.scenarios) {
-    if (a.labelled > 0) {
-      std::snprintf(line, sizeof line, "%-10s %6d %12.4f %12.4f %8d %8.1f%% %8.1f%% %8.1f%%\n",
-                    name.c_str(), a.scenes, a.model_end_error, a.baseline_end_error, a.labelled,
-                    100 * a.model_accuracy, 100 * a.baseline_accuracy, 100 * a.truth_accuracy);
-    } else {
-      std::snprintf(line, sizeof line, "%-10s %6d %12.4f %12.4f %8s %9s %9s %9s\n", name.c_str(),
-                    a.scenes, a.model_end_error, a.baseline_end_error, "-", "-", "-", "-");
-    }
+    char end[32] = "-";
+    if (baseline) std::snprintf(end, sizeof end, "%.4f", a.baseline_end_error);
+    const bool labelled = a.labelled > 0;
+    std::snprintf(line, sizeof line, "%-10s %6d %12.4f %12s %8s %9s %9s %9s\n", name.c_str(),
+                  a.scenes, a.model_end_error, end,
+                  labelled ? std::to_string(a.labelled).c_str() : "-",
+                  labelled ? percent(a.model_accuracy).c_str() : "-",
+                  labelled && baseline ? percent(a.baseline_accuracy).c_str() : "-",
+                  labelled ? percent(a.truth_accuracy).c_str() : "-");
+    out += line;
+  }
+  if (s.contact.scenarios >= 2) {
+    std::snprintf(line, sizeof line, "%-10s %6s %12s %12s %8s %9s %9s %9s  (%d scenarios)\n",
+                  "mean", "", "", "", "", percent(s.contact.model).c_str(),
+                  baseline ? percent(s.contact.baseline).c_str() : "-",
+                  percent(s.contact.truth).c_str(), s.contact.scenarios);
     out += line;
   }
   return out;

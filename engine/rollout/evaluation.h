@@ -53,6 +53,13 @@ struct ScenarioSummary {
   double truth_accuracy = 0.0;  ///< The threshold rule on ground truth (its ceiling).
 };
 
+/// Contact accuracy as the Physion benchmark averages it: the unweighted mean over the scenarios
+/// that have labelled scenes (for one such scenario, or equal counts, the same as "all").
+struct ContactMean {
+  int scenarios = 0;  ///< Scenarios with labelled scenes (0: no contact accuracy).
+  double model = 0.0, baseline = 0.0, truth = 0.0;
+};
+
 /// The whole evaluation.
 struct EvalSummary {
   std::string dir, split;
@@ -61,6 +68,7 @@ struct EvalSummary {
   double threshold = 0.0;  ///< Contact threshold used (scene units).
   std::vector<SceneEvaluation> scenes;
   std::map<std::string, ScenarioSummary> scenarios;  ///< Per scenario, plus "all".
+  ContactMean contact;  ///< Mean contact accuracy over the scenarios (the headline number).
 };
 
 /// The physics-free floor of every comparison: constant velocity plus the scenario's gravity,
@@ -99,7 +107,8 @@ std::string eval_to_json(const EvalSummary& summary);
 /// file cannot be read, FormatError naming the field for anything malformed.
 EvalSummary read_eval_json(const std::string& path);
 
-/// A plain-text table of the per-scenario summary.
+/// A plain-text table of the per-scenario summary (with a "mean" row of the scenarios' contact
+/// accuracy when two or more scenarios are labelled).
 std::string eval_table(const EvalSummary& summary);
 
 }  // namespace dynscope

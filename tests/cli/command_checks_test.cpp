@@ -6,6 +6,7 @@
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/support/read_file.h"
@@ -107,6 +108,39 @@ TEST_F(CommandChecks, EvalMaxScenesSamplesTheSplitAndSaysSo) {
   const std::string json = read_bytes(path("one.json"));
   EXPECT_NE(json.find("movi-a_0000.h5"), std::string::npos) << json;
   EXPECT_EQ(json.find("movi-a_0001.h5"), std::string::npos) << "only the first of two scenes";
+}
+
+// `eval --data A B` evaluates the scenarios of several directories as one set: contact accuracy
+// per scenario and their mean, which `compare` reads back with a per-scenario table.
+TEST_F(CommandChecks, EvalOfSeveralScenarioDirectoriesGivesTheMeanOverScenarios) {
+  for (const char* scenario : {"collide", "roll"}) {
+    const std::string dir = path(scenario);
+    fs::create_directories(dir);
+    fs::copy_file(kSource + "/assets/scenes/" + scenario + "_manifest.json",
+                  dir + "/manifest.json");
+    for (const char* i : {"_0000.h5", "_0001.h5"}) {
+      fs::copy_file(kSource + "/assets/scenes/" + scenario + i, dir + "/" + scenario + i);
+    }
+  }
+  const std::string eval = "eval --checkpoint " + kSource +
+                           "/assets/models/physion_pointconv_acc.pt --split all --threads 1";
+  expect_refused(eval + " --data " + path("collide") + " " + path("collide"),
+                 {"data", "named twice"});
+  const auto r = run_dynscope(eval + " --data " + path("collide") + " " + path("roll") +
+                              " --json " + path("both.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(2 scenarios)"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(path("both.json")));
+  ASSERT_EQ(j.at("scenes").size(), 4u);
+  const double collide = j.at("scenarios").at("collide").at("contact_accuracy").get<double>();
+  const double roll = j.at("scenarios").at("roll").at("contact_accuracy").get<double>();
+  EXPECT_DOUBLE_EQ(j.at("contact_scenario_mean").at("contact_accuracy").get<double>(),
+                   (collide + roll) / 2);
+  EXPECT_EQ(j.at("contact_scenario_mean").at("scenarios"), 2);
+  const auto c = run_dynscope("compare model=" + path("both.json"));
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_NE(c.output.find("per scenario"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("collide"), std::string::npos) << c.output;
 }
 
 // An output into a directory that does not exist is refused before any work (one line, no

@@ -147,6 +147,72 @@ TEST(EvalComparison, SeparatedRunsAndContactAccuracy) {
   EXPECT_NE(comparison_table(c).find("apart"), std::string::npos);
 }
 
+// Physion-like: contact accuracy is averaged over scenarios (the benchmark's convention), not
+// pooled over scenes, and the comparison gives each scenario's accuracy over seeds.
+TEST(EvalComparison, ContactAccuracyIsTheMeanOverScenariosWithAPerScenarioTable) {
+  auto in = [](SceneEvaluation e, const std::string& scenario) {
+    e.scenario = scenario;
+    return e;
+  };
+  // drop: 3 scenes, 1 right; roll: 1 scene, right. Pooled 2/4, mean over scenarios (1/3 + 1)/2.
+  const std::vector<SceneEvaluation> seed1 = {
+      in(scene("d0.h5", 1.0, 1, true), "drop"), in(scene("d1.h5", 1.0, 1, false), "drop"),
+      in(scene("d2.h5", 1.0, 0, true), "drop"), in(scene("r0.h5", 1.0, 0, false), "roll")};
+  // Seed 2: drop 2 of 3 right, roll wrong: mean over scenarios (2/3 + 0)/2.
+  const std::vector<SceneEvaluation> seed2 = {
+      in(scene("d0.h5", 1.0, 1, true), "drop"), in(scene("d1.h5", 1.0, 1, true), "drop"),
+      in(scene("d2.h5", 1.0, 0, true), "drop"), in(scene("r0.h5", 1.0, 0, true), "roll")};
+  const EvalSummary s1 = read_eval_json(write_eval("phys1", seed1));
+  EXPECT_DOUBLE_EQ(s1.scenarios.at("all").model_accuracy, 0.5);
+  EXPECT_EQ(s1.contact.scenarios, 2);
+  EXPECT_DOUBLE_EQ(s1.contact.model, (1.0 / 3.0 + 1.0) / 2.0);
+  EXPECT_DOUBLE_EQ(s1.contact.baseline, (1.0 / 3.0 + 1.0) / 2.0) << "never predicts contact";
+  EXPECT_DOUBLE_EQ(s1.contact.truth, 1.0);
+  const std::string table = eval_table(s1);
+  EXPECT_NE(table.find("mean"), std::string::npos) << table;
+  EXPECT_NE(table.find("66.7%"), std::string::npos) << table;
+  EXPECT_NE(table.find("(2 scenarios)"), std::string::npos) << table;
+  EXPECT_NE(table.find("66.7%     66.7%    100.0%"), std::string::npos)
+      << "mean row: model, baseline, truth\n"
+      << table;
+  // Without the baseline (eval --no-baseline) its columns say "-", not 0.
+  std::vector<SceneEvaluation> bare = seed1;
+  for (SceneEvaluation& e : bare) e.baseline_curve.clear();
+  const std::string no_baseline = eval_table(read_eval_json(write_eval("phys_bare", bare)));
+  EXPECT_EQ(no_baseline.find("0.0000"), std::string::npos) << no_baseline;
+  EXPECT_NE(no_baseline.find("66.7%         -    100.0%"), std::string::npos) << no_baseline;
+
+  const EvalComparison c =
+      compare_evaluations({run("model", {write_eval("phys1", seed1), write_eval("phys2", seed2)})});
+  ASSERT_EQ(c.contact_scenarios, (std::vector<std::string>{"drop", "roll"}));
+  const RunStats& r = c.runs.at(0);
+  const double m1 = (1.0 / 3.0 + 1.0) / 2.0, m2 = (2.0 / 3.0 + 0.0) / 2.0;
+  EXPECT_DOUBLE_EQ(r.accuracy_mean, (m1 + m2) / 2.0);
+  EXPECT_NEAR(r.accuracy_sd, std::abs(m1 - m2) / std::sqrt(2.0), 1e-12);
+  EXPECT_DOUBLE_EQ(r.scenario_accuracy_mean.at(0), 0.5);  // drop: 1/3 and 2/3
+  EXPECT_NEAR(r.scenario_accuracy_sd.at(0), (1.0 / 3.0) / std::sqrt(2.0), 1e-12);
+  EXPECT_DOUBLE_EQ(r.scenario_accuracy_mean.at(1), 0.5);  // roll: 1 and 0
+  EXPECT_DOUBLE_EQ(c.floor_scenario_accuracy.at(0), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(c.floor_scenario_accuracy.at(1), 1.0);
+  EXPECT_DOUBLE_EQ(c.floor_accuracy, m1);
+  EXPECT_DOUBLE_EQ(c.truth_scenario_accuracy.at(1), 1.0);
+  const std::string compared = comparison_table(c);
+  EXPECT_NE(compared.find("mean over 2 scenarios"), std::string::npos) << compared;
+  EXPECT_NE(compared.find("50.0 ± 23.6"), std::string::npos) << compared;
+  EXPECT_NE(compared.find("50.0 ± 70.7"), std::string::npos) << compared;
+  const nlohmann::json j = nlohmann::json::parse(comparison_to_json(c));
+  EXPECT_DOUBLE_EQ(
+      j.at("runs").at(0).at("scenario_contact_accuracy").at("roll").at("sd").get<double>(),
+      std::sqrt(0.5));
+  EXPECT_DOUBLE_EQ(j.at("scenario_floor_contact_accuracy").at("roll").get<double>(), 1.0);
+
+  // One scenario: no per-scenario table; the mean is that scenario's accuracy.
+  const EvalComparison one = compare_evaluations(
+      {run("one", {write_eval("ca_one", {scene("s0.h5", 1.0, 1, true), scene("s1.h5", 1.0, 0)})})});
+  EXPECT_TRUE(one.contact_scenarios.empty());
+  EXPECT_EQ(comparison_table(one).find("per scenario"), std::string::npos);
+}
+
 TEST(EvalComparison, FilesOfOtherScenesOrMalformedFilesAreClearErrors) {
   const std::string a = write_eval("ea", {scene("s0.h5", 1.0), scene("s1.h5", 2.0)});
   const std::string fewer = write_eval("eb", {scene("s0.h5", 1.0)});
