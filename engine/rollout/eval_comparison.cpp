@@ -85,7 +85,6 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
   c.split = first->split;
   c.scenes = static_cast<int>(scene_index.size());
   c.floor_end_error = c.floor_accuracy = c.truth_accuracy = kNaN;
-  // The floor and the ceiling do not depend on the model: taken from an evaluation that has them.
   // The same scenes, so the same labelled scenarios in every evaluation.
   if (first->contact.scenarios >= 2) {
     for (const auto& [name, a] : first->scenarios) {
@@ -95,6 +94,7 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
   const size_t n_scenarios = c.contact_scenarios.size();
   c.floor_scenario_accuracy.assign(n_scenarios, kNaN);
   c.truth_scenario_accuracy.assign(n_scenarios, kNaN);
+  // The floor and the ceiling do not depend on the model: taken from an evaluation that has them.
   for (const RunEvaluations& run : runs) {
     for (const EvalSummary& s : run.seeds) {
       const ScenarioSummary& all = s.scenarios.at("all");
@@ -217,7 +217,7 @@ std::string comparison_table(const EvalComparison& c) {
   if (!c.contact_scenarios.empty()) {
     out += "contact accuracy above: the mean over " + std::to_string(c.contact_scenarios.size()) +
            " scenarios; per scenario (%, mean ± sd over seeds):\n";
-    size_t cell = 11;  // "61.1 ± 13.4"
+    size_t cell = 12;  // "61.1 ± 13.4" and a space
     for (const std::string& name : c.contact_scenarios) cell = std::max(cell, name.size());
     std::snprintf(line, sizeof line, "%-*s", w, "run");
     out += line;
