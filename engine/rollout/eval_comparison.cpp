@@ -73,6 +73,12 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
                                      std::to_string(first->scenes.size()) + " scenes of " +
                                      first_path + " (or appears twice)");
         }
+        const SceneEvaluation& f = first->scenes[scene_index.at(e.file)];
+        if (e.scenario != f.scenario || e.label != f.label || e.has_contact != f.has_contact) {
+          throw ValueError(
+              path,
+              "scene " + e.file + " has another scenario or contact label than in " + first_path);
+        }
       }
       if (files.size() != scene_index.size()) {
         throw ValueError(path, "evaluates " + std::to_string(files.size()) + " scenes, " +
@@ -191,8 +197,9 @@ std::string comparison_table(const EvalComparison& c) {
   for (const RunStats& r : c.runs) {
     std::string ratio =
         std::isnan(c.floor_end_error) ? "-" : fmt("%.2fx", r.end_error_mean / c.floor_end_error);
-    std::snprintf(line, sizeof line, "%-*s %5d %18s %9s", w, r.label.c_str(), r.seeds,
-                  fmt("%.4f ± %.4f", r.end_error_mean, r.end_error_sd).c_str(), ratio.c_str());
+    std::snprintf(line, sizeof line, "%-*s %5d %s %9s", w, r.label.c_str(), r.seeds,
+                  right_aligned(fmt("%.4f ± %.4f", r.end_error_mean, r.end_error_sd), 18).c_str(),
+                  ratio.c_str());
     out += line;
     if (contact) {
       out += r.labelled > 0
@@ -248,8 +255,8 @@ std::string comparison_table(const EvalComparison& c) {
                 "A better on", "seed intervals");
   out += line;
   for (const PairedDifference& p : c.pairs) {
-    std::snprintf(line, sizeof line, "%-*s %-*s %20s %14s  %s\n", w, p.a.c_str(), w, p.b.c_str(),
-                  fmt("%+.4f ± %.4f", p.mean, p.std_error).c_str(),
+    std::snprintf(line, sizeof line, "%-*s %-*s %s %14s  %s\n", w, p.a.c_str(), w, p.b.c_str(),
+                  right_aligned(fmt("%+.4f ± %.4f", p.mean, p.std_error), 20).c_str(),
                   (std::to_string(p.a_better) + "/" + std::to_string(p.scenes)).c_str(),
                   !p.seed_intervals_overlap   ? "- (needs 2+ seeds each)"
                   : *p.seed_intervals_overlap ? "overlap"

@@ -119,6 +119,9 @@ TEST(EvalComparison, SeedMeansAndPairedDifferencesMatchAHandComputation) {
   EXPECT_FALSE(p.seed_intervals_overlap.has_value()) << "B has one seed: no interval";
   const std::string table = comparison_table(c);
   EXPECT_NE(table.find("2.6667 ± 0.9428"), std::string::npos) << table;
+  EXPECT_NE(table.find("A         2    2.6667 ± 0.9428"), std::string::npos)
+      << "right-aligned in 18 characters under \"end error\" (± is one)\n"
+      << table;
   EXPECT_NE(table.find("+0.1667"), std::string::npos) << table;
   const nlohmann::json j = nlohmann::json::parse(comparison_to_json(c));
   EXPECT_EQ(j.at("pairs").at(0).at("a_better"), 1);
@@ -211,6 +214,24 @@ TEST(EvalComparison, ContactAccuracyIsTheMeanOverScenariosWithAPerScenarioTable)
       {run("one", {write_eval("ca_one", {scene("s0.h5", 1.0, 1, true), scene("s1.h5", 1.0, 0)})})});
   EXPECT_TRUE(one.contact_scenarios.empty());
   EXPECT_EQ(comparison_table(one).find("per scenario"), std::string::npos);
+}
+
+// The same scene file must be the same scene in every evaluation: scenario and label included.
+TEST(EvalComparison, ASceneWithAnotherScenarioOrLabelIsAClearError) {
+  SceneEvaluation moved = scene("s0.h5", 1.0, 1, true);
+  moved.scenario = "drop";
+  const std::string a = write_eval("lab_a", {scene("s0.h5", 1.0, 1, true), scene("s1.h5", 1.0, 0)});
+  const std::string b = write_eval("lab_b", {moved, scene("s1.h5", 1.0, 0)});
+  const std::string c = write_eval("lab_c", {scene("s0.h5", 1.0, 0, true), scene("s1.h5", 1.0, 0)});
+  for (const std::string& other : {b, c}) {
+    try {
+      compare_evaluations({run("A", {a, other})});
+      FAIL() << other;
+    } catch (const ValueError& e) {
+      EXPECT_NE(std::string(e.what()).find("s0.h5"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("scenario or contact label"), std::string::npos);
+    }
+  }
 }
 
 TEST(EvalComparison, FilesOfOtherScenesOrMalformedFilesAreClearErrors) {
