@@ -33,7 +33,7 @@ struct TrainArgs {
   int64_t max_steps = 0;
   double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
-  bool resume = false, keep_epochs = false;
+  bool resume = false, keep_epochs = false, hold_static = false;
   DistributedArgs dist;
   CLI::App* cmd = nullptr;
 };
@@ -68,6 +68,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--noise-std")) o.noise_std = a.noise_std;
   if (given(a, "--noise-mode")) o.noise_mode = a.noise_mode;
   if (given(a, "--keep-epochs")) o.keep_epochs = a.keep_epochs;
+  if (given(a, "--hold-static")) o.model.hold_static = a.hold_static;
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
@@ -241,6 +242,10 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--levels", a->levels, "Hierarchy levels (default 4)");
   cmd->add_option("--bottleneck-blocks", a->bottleneck, "Blocks at the coarsest level (default 3)");
   cmd->add_option("--stem-blocks", a->stem, "Blocks at level 0 before downsampling (default 0)");
+  cmd->add_flag("--hold-static", a->hold_static,
+                "Static bodies (mass 0: tables, ramps, zones) are given, not predicted: their "
+                "points stay inputs but are left out of the loss (each scene's loss is the mean "
+                "over its moving points) and held where they are in every rollout of the model");
   cmd->add_option("--k", a->k, "Neighbours per conv (default 16)");
   cmd->add_option("--c-mid", a->c_mid, "WeightNet output width (default 16)");
   cmd->add_option("--voxel", a->voxel, "Level-1 voxel (default by scale)");

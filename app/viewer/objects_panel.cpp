@@ -83,7 +83,7 @@ void draw_objects_panel(const ViewerState& state, PanelFields& fields, Actions& 
     ImGui::TableNextColumn();
     ImGui::TextUnformatted(role_name(o.role));
     ImGui::TableNextColumn();
-    ImGui::Text(o.mass == 0.0 ? "static" : "%.3g", o.mass);
+    ImGui::Text(o.is_static() ? "static" : "%.3g", o.mass);
     ImGui::TableNextColumn();
     ImGui::Text("%.2f", o.friction);
     ImGui::TableNextColumn();

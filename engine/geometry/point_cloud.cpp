@@ -86,6 +86,19 @@ int64_t ScenePointCloud::count_of(int i) const {
   return n;
 }
 
+std::vector<uint8_t> ScenePointCloud::static_mask(const Scene& scene) const {
+  std::vector<uint8_t> mask(object.size(), 0);
+  for (size_t i = 0; i < object.size(); ++i) {
+    if (object[i] < 0 || static_cast<size_t>(object[i]) >= scene.objects.size()) {
+      throw ValueError("points", "point " + std::to_string(i) + " refers to object index " +
+                                     std::to_string(object[i]) + " of a scene with " +
+                                     std::to_string(scene.objects.size()) + " objects");
+    }
+    mask[i] = scene.objects[static_cast<size_t>(object[i])].is_static() ? 1 : 0;
+  }
+  return mask;
+}
+
 ScenePointCloud build_point_cloud(const Scene& scene, const PointCloudOptions& options) {
   if (!std::isfinite(options.voxel) || options.voxel <= 0.0) {
     throw ValueError("voxel", "must be finite and positive, got " + std::to_string(options.voxel));

@@ -29,6 +29,9 @@ struct ScenePointCloud {
   Points positions(const Scene& scene, int frame) const;
   /// Number of points of object index `i`.
   int64_t count_of(int i) const;
+  /// `[N]` 1 for the points of static objects (Object::is_static) of `scene`, else 0. Throws
+  /// ValueError when the points do not match the scene.
+  std::vector<uint8_t> static_mask(const Scene& scene) const;
 };
 
 /// Samples each object's scaled mesh uniformly by area (ceil(oversample · area / voxel²) samples,

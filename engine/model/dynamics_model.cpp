@@ -209,6 +209,11 @@ Points DynamicsModelImpl::predict_next(const PointState& state, HierarchyCache* 
   const torch::Tensor delta = predict_delta(input).to(torch::kCPU, torch::kDouble).contiguous();
   Points out = state.position;
   out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);
+  if (config_.hold_static && !state.static_points.empty()) {
+    for (Eigen::Index i = 0; i < state.size(); ++i) {
+      if (state.static_points[static_cast<size_t>(i)] != 0) out.row(i) = state.position.row(i);
+    }
+  }
   return out;
 }
 

@@ -60,8 +60,8 @@ class DynamicsModelImpl : public torch::nn::Module {
   /// (one per rollout) reuses what it can certify (HierarchyCache); the result is the same.
   Hierarchy build_hierarchy(const PointState& state, HierarchyCache* cache = nullptr) const;
   /// Builds the hierarchy (with `cache` when given), runs the model without gradients and returns
-  /// p̂(t+1) `[N,3]` (double; the prediction is added to p(t) in double precision). Throws
-  /// ValueError on a bad state.
+  /// p̂(t+1) `[N,3]` (double; the prediction is added to p(t) in double precision); with
+  /// hold_static, the state's static points keep p(t) exactly. Throws ValueError on a bad state.
   Points predict_next(const PointState& state, HierarchyCache* cache = nullptr);
 
   const ModelConfig& config() const { return config_; }

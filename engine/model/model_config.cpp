@@ -115,6 +115,7 @@ std::string ModelConfig::to_json() const {
   j["layer_norm"] = layer_norm;
   j["interaction_threshold"] = interaction_threshold;
   j["interaction_lattice"] = interaction_lattice;
+  if (hold_static) j["hold_static"] = true;
   return j.dump();
 }
 
@@ -174,6 +175,7 @@ ModelConfig ModelConfig::from_json(const std::string& text, const std::string& s
   read_field(j, "layer_norm", source, c.layer_norm);
   read_field(j, "interaction_threshold", source, c.interaction_threshold);
   read_field(j, "interaction_lattice", source, c.interaction_lattice);
+  read_field(j, "hold_static", source, c.hold_static);
   try {
     c.validate();
   } catch (const ValueError& e) {

@@ -49,6 +49,11 @@ struct ModelConfig {
   bool layer_norm = true;      ///< LayerNorm inside every conv unit; false: no normalisation.
   double interaction_threshold = 0.1;  ///< Mesh input: face-to-face interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: samples per face edge when pairing faces.
+  /// Static bodies (mass 0) are given, not predicted: their points are inputs like any other but
+  /// stay where they are (p̂(t+1) = p(t), PointState::static_points) and training leaves them out
+  /// of the loss, each scene's loss being the mean over its moving points. false: every point is
+  /// predicted and in the loss (the paper's formulation and every model trained before it).
+  bool hold_static = false;
 
   /// The paper's Physion scale (voxel 0.075, radius 0.1) or Kubric scale (0.3, 0.4); `name` is
   /// "physion" or "kubric", anything else throws ValueError("scale", ...).
@@ -63,7 +68,8 @@ struct ModelConfig {
 
   /// Throws ValueError naming the first field out of range.
   void validate() const;
-  /// Compact JSON object with every field.
+  /// Compact JSON object with every field (hold_static only when set, so that the configurations of
+  /// models without it stay byte-identical to those written before it existed).
   std::string to_json() const;
   /// Parses JSON written by to_json(); missing fields keep their defaults. Throws FormatError
   /// (`source`, field, ...) on malformed JSON, wrong types or unknown enum names, and on values

@@ -33,6 +33,10 @@ void PointState::validate() const {
                                         ", prev_velocity " + std::to_string(prev_velocity.rows()) +
                                         ", object_ids " + std::to_string(object_ids.size()));
   }
+  if (!static_points.empty() && static_cast<Eigen::Index>(static_points.size()) != n) {
+    throw ValueError("point_state", "static_points has " + std::to_string(static_points.size()) +
+                                        " entries for " + std::to_string(n) + " points");
+  }
   if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= n)) {
     throw ValueError("point_state", "face index out of range [0, " + std::to_string(n) + ")");
   }

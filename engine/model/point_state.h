@@ -16,6 +16,9 @@ struct PointState {
   Points prev_velocity = Points(0, 3);  ///< `[N,3]` v(t−1).
   std::vector<int32_t> object_ids;      ///< `[N]` object id of each point.
   Faces faces = Faces(0, 3);  ///< `[F,3]` triangles over the points (mesh input only; else empty).
+  /// `[N]` 1 for points of static bodies (ScenePointCloud::static_mask), or empty when unknown. A
+  /// model configured with hold_static leaves these points where they are.
+  std::vector<uint8_t> static_points;
 
   Eigen::Index size() const { return position.rows(); }
 

@@ -30,6 +30,7 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
   }
   r.pose_rigid = rigid;
   const RigidProjector projector(cloud, rigid);
+  const std::vector<uint8_t> static_points = cloud.static_mask(scene);
 
   r.scenario = scene.scenario;
   r.dt_s = scene.dt_s;
@@ -63,6 +64,7 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
         PointState s = PointState::from_positions(r.predicted[t], r.predicted[t - 1],
                                                   r.predicted[t - 2], cloud.object_id);
         s.faces = points.faces;
+        s.static_points = static_points;
         return s;
       }();
       const Points raw = predict(state);

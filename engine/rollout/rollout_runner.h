@@ -24,7 +24,8 @@ struct RolloutOptions {
 };
 
 /// Runs `predict` autoregressively on the scene's model points: frames < observed_frames copy the
-/// ground truth, every later frame is predict(state of the previous three frames), then each
+/// ground truth, every later frame is predict(state of the previous three frames, with the scene's
+/// static points marked in PointState::static_points), then each
 /// rigid object is projected to one rigid transform (RigidProjector). Fills positions, poses
 /// (fitted to the truth for observed frames), the per-frame point error and, when the scene has a
 /// target and a zone, the per-frame target–zone distances. Reports each predicted frame to

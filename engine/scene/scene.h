@@ -27,13 +27,15 @@ struct Object {
   /// Mesh in the object's local frame; world vertices are pose.apply(mesh.scaled(scale)).
   Mesh mesh;
   Vec3 scale = Vec3::Ones();
-  double mass = 1.0;         ///< kg; 0 means static (immovable).
-  double friction = 0.5;     ///< Coulomb coefficient.
-  double restitution = 0.5;  ///< Bounciness in [0, 1].
+  double mass = 1.0;                 ///< kg; 0 means static (immovable).
+  double friction = 0.5;             ///< Coulomb coefficient.
+  double restitution = 0.5;          ///< Bounciness in [0, 1].
   Vec3 color = Vec3(0.6, 0.6, 0.6);  ///< Linear RGB in [0, 1].
 
   /// The mesh with `scale` applied (still in the object frame).
   Mesh scaled_mesh() const { return mesh.scaled(scale); }
+  /// A static body (mass 0): the simulation never moves it (tables, ramps, containers, zones).
+  bool is_static() const { return mass == 0.0; }
 };
 
 /// Per-frame state of one object: poses for rigid objects, vertex positions for deformable ones.

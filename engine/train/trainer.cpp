@@ -31,6 +31,7 @@
 #include "engine/rollout/model_predictor.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/train/adam_step.h"
+#include "engine/train/point_loss.h"
 #include "engine/train/process_group_torch.h"
 #include "engine/train/train_state.h"
 
@@ -50,6 +51,8 @@ struct SceneData {
   Scene scene;
   ModelPoints points;
   std::vector<Points> frames;
+  std::vector<uint8_t> static_points;  // ScenePointCloud::static_mask
+  int64_t moving_points = 0;           // points not in static_points
 };
 
 SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
@@ -62,6 +65,8 @@ SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
   }
   d.points = build_model_points(d.scene, sampling);
   for (int f = 0; f < d.scene.num_frames(); ++f) d.frames.push_back(d.points.positions(d.scene, f));
+  d.static_points = d.points.cloud.static_mask(d.scene);
+  for (const uint8_t s : d.static_points) d.moving_points += s == 0 ? 1 : 0;
   return d;
 }
 
@@ -89,6 +94,7 @@ Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng)
   e.state.prev_velocity = v_prev;
   e.state.object_ids = d.points.cloud.object_id;
   e.state.faces = d.points.faces;
+  e.state.static_points = d.static_points;
   e.next = d.frames[static_cast<size_t>(t + 1)];
   return e;
 }
@@ -97,6 +103,8 @@ Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng)
 struct PreparedBatch {
   ModelInput input;
   torch::Tensor truth;  // float64 [P,3]
+  // float32 [P,1], 0 for the static points of a model that holds them; else undefined.
+  torch::Tensor moving;
   int64_t points = 0;
   int64_t global_points = 0;  // points of the whole step over all ranks (normalises the loss)
   bool empty = false;         // this rank has no example in the step (end of an epoch)
@@ -107,29 +115,34 @@ struct PreparedBatch {
 PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Example>& examples) {
   std::vector<ModelInput> inputs;
   std::vector<torch::Tensor> truths;
+  std::vector<float> moving;
   PreparedBatch b;
   for (const Example& e : examples) {
     inputs.push_back(make_model_input(e.state, model.build_hierarchy(e.state)));
     truths.push_back(points_to_tensor(e.next));
     b.points += e.state.size();
+    for (Eigen::Index i = 0; i < e.state.size(); ++i) {
+      moving.push_back(e.state.static_points.empty() ||
+                               e.state.static_points[static_cast<size_t>(i)] == 0
+                           ? 1.0f
+                           : 0.0f);
+    }
   }
   b.input = concatenate_inputs(inputs);
   b.truth = torch::cat(truths);
+  if (model.config().hold_static) {
+    b.moving =
+        torch::from_blob(moving.data(), {static_cast<int64_t>(moving.size()), 1}, torch::kFloat)
+            .clone();
+  }
   return b;
 }
 
 // Sum over points and components of the Huber loss in target-std units, one forward pass for the
-// whole batch.
+// whole batch; held static points (ModelConfig::hold_static) add nothing.
 torch::Tensor batch_loss(DynamicsModel& model, const PreparedBatch& b, double delta) {
-  const torch::Tensor predicted = model->predict_positions(b.input);
-  // p̂ − p equals the target error; dividing by the target std makes delta scale-free.
-  const NormStats stats = model->stats();
-  const torch::Tensor std = torch::tensor(
-      {stats.target_std.x(), stats.target_std.y(), stats.target_std.z()}, torch::kDouble);
-  const torch::Tensor err = ((predicted - b.truth) / std).to(torch::kFloat);
-  return torch::nn::functional::huber_loss(
-      err, torch::zeros_like(err),
-      torch::nn::functional::HuberLossFuncOptions().reduction(torch::kSum).delta(delta));
+  return point_loss_sum(model->predict_positions(b.input), b.truth, model->stats().target_std,
+                        delta, b.moving);
 }
 
 // Prepares the next batch on a thread of its own while the current step runs on this one.
@@ -368,7 +381,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     int64_t global_points = 0;
     for (int64_t b = first; b < std::min(first + global_batch, draws); ++b) {
       const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
-      global_points += d.points.size();
+      global_points += model->config().hold_static ? d.moving_points : d.points.size();
       if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
       const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
       Example e = make_example(d, t, o, &rng);
@@ -419,9 +432,10 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     optimizer.zero_grad();
     const auto step_start = std::chrono::steady_clock::now();
     // Normalised by the points of the whole step (all ranks), so summed gradients are the mean.
-    torch::Tensor loss = batch.empty ? torch::zeros({}, torch::kFloat)
-                                     : batch_loss(model, batch, o.huber_delta) /
-                                           static_cast<double>(batch.global_points * 3);
+    torch::Tensor loss =
+        batch.empty ? torch::zeros({}, torch::kFloat)
+                    : batch_loss(model, batch, o.huber_delta) /
+                          static_cast<double>(std::max<int64_t>(batch.global_points, 1) * 3);
     if (!batch.empty) loss.backward();
     double value = loss.item<double>();
     if (group) {
@@ -478,13 +492,13 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
           const Example e = make_example(
               d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), o, nullptr);
           sum += batch_loss(model, prepare_batch(*model, {e}), o.huber_delta).item<double>();
-          n += e.state.size() * 3;
+          n += (model->config().hold_static ? d.moving_points : e.state.size()) * 3;
           RolloutOptions ro;
           ro.observed_frames = 3;
           ro.frames = std::min(d.scene.num_frames(), std::max(o.val_frames, 4));
           err += run_rollout(d.scene, d.points, predict, ro).point_error.back();
         }
-        val_loss = rep.val_loss = sum / static_cast<double>(n);
+        val_loss = rep.val_loss = sum / static_cast<double>(std::max<int64_t>(n, 1));
         val_err = rep.val_rollout_error = err / static_cast<double>(val.size());
         // Model selection on the validation split: the best epoch so far is kept beside the
         // run's latest checkpoint. Only whole epochs compete, so where a sitting happens to end

@@ -129,6 +129,42 @@ TEST(DynamicsModelTest, RejectsMismatchedState) {
   PointState st = make_state(scene, 1);
   st.object_ids.pop_back();
   EXPECT_THROW(model->predict_next(st), ValueError);
+  PointState wrong_mask = make_state(scene, 1);
+  wrong_mask.static_points.assign(39, 0);
+  EXPECT_THROW(model->predict_next(wrong_mask), ValueError);
+}
+
+// hold_static: the state's static points keep p(t) exactly, every other point gets the
+// prediction of the same network without it; a state that marks nothing is predicted whole.
+TEST(DynamicsModelTest, HeldStaticPointsKeepTheirPositionExactly) {
+  const auto scene = make_scene(3, 20, 4);
+  ModelConfig held_config = tiny_config();
+  held_config.hold_static = true;
+  torch::manual_seed(5);
+  DynamicsModel plain(tiny_config());
+  plain->set_stats(some_stats());
+  DynamicsModel held(held_config);
+  {
+    torch::NoGradGuard no_grad;
+    const auto source = plain->named_parameters();
+    for (auto& item : held->named_parameters()) item.value().copy_(source[item.key()]);
+  }
+  held->set_stats(some_stats());
+  PointState st = make_state(scene, 2);
+  st.static_points.assign(60, 0);
+  for (int i = 20; i < 40; ++i) st.static_points[static_cast<size_t>(i)] = 1;  // the middle box
+  const Points p = plain->predict_next(st);
+  const Points h = held->predict_next(st);
+  for (Eigen::Index i = 0; i < 60; ++i) {
+    if (st.static_points[static_cast<size_t>(i)] != 0) {
+      EXPECT_TRUE(h.row(i) == st.position.row(i)) << i;
+      EXPECT_GT((p.row(i) - st.position.row(i)).norm(), 1e-6) << i;  // it would have moved
+    } else {
+      EXPECT_TRUE(h.row(i) == p.row(i)) << i;
+    }
+  }
+  st.static_points.clear();
+  EXPECT_TRUE(held->predict_next(st) == plain->predict_next(st));
 }
 
 // Huber loss on p̂(t+1) for one rigid-ish transition must drop 100× under Adam.

@@ -31,6 +31,20 @@ TEST(ModelConfigTest, JsonRoundTripKeepsEveryField) {
   EXPECT_FALSE(d.layer_norm);
 }
 
+// hold_static round-trips; off, it is not written, so the configurations stored in checkpoints
+// and training states before it existed still compare equal.
+TEST(ModelConfigTest, HoldStaticRoundTripsAndIsOmittedWhenOff) {
+  ModelConfig c = ModelConfig::preset("physion");
+  EXPECT_FALSE(c.hold_static);
+  EXPECT_EQ(c.to_json().find("hold_static"), std::string::npos);
+  EXPECT_FALSE(ModelConfig::from_json(c.to_json()).hold_static);
+  c.hold_static = true;
+  const ModelConfig d = ModelConfig::from_json(c.to_json());
+  EXPECT_TRUE(d.hold_static);
+  EXPECT_EQ(d.to_json(), c.to_json());
+  EXPECT_THROW(ModelConfig::from_json(R"({"hold_static": "yes"})"), FormatError);
+}
+
 TEST(ModelConfigTest, PaperScalesGrowByOnePointFive) {
   const ModelConfig p = ModelConfig::preset("physion");
   EXPECT_DOUBLE_EQ(p.voxel_at(0), 0.0);

@@ -5,6 +5,7 @@
 #include <torch/torch.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,8 +14,11 @@
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
+#include "engine/io/scene_file.h"
 #include "engine/model/checkpoint.h"
+#include "engine/rollout/rollout_runner.h"
 #include "engine/sim/dataset.h"
+#include "engine/train/point_loss.h"
 #include "tests/train/train_fixtures.h"
 
 namespace dynscope {
@@ -201,6 +205,92 @@ TEST(TrainerTest, TrainsOnSeveralDatasetsOfOneScaleAndRejectsMixedScales) {
 // v). Per-object noise: the same stds, one draw shared by every point of an object, so a rigid
 // object's points keep their true relative velocities; objects differ and the draw does not
 // depend on the order of the points. Centred: per point, each object's mean removed.
+// The loss leaves held static rows out: their error, however large, adds nothing and gets no
+// gradient; the other rows give the Huber loss of their error in target stds.
+TEST(PointLossTest, RowsMarkedStaticAddNothingAndGetNoGradient) {
+  const Vec3 target_std(0.5, 1.0, 2.0);
+  const torch::Tensor truth = torch::zeros({3, 3}, torch::kDouble);
+  torch::Tensor predicted =
+      torch::tensor({0.25, -1.0, 4.0, 100.0, 100.0, 100.0, 1.0, 0.0, 0.0}, torch::kDouble)
+          .view({3, 3})
+          .requires_grad_(true);
+  const torch::Tensor moving = torch::tensor({1.0f, 0.0f, 1.0f}).view({3, 1});
+  const torch::Tensor loss = point_loss_sum(predicted, truth, target_std, 1.0, moving);
+  // In stds, row 0 is (0.5, -1, 2) and row 2 (2, 0, 0); Huber with delta 1: 0.125 + 0.5 + 1.5
+  // + 1.5.
+  EXPECT_NEAR(loss.item<double>(), 3.625, 1e-6);
+  loss.backward();
+  EXPECT_EQ(predicted.grad()[1].abs().sum().item<double>(), 0.0);
+  EXPECT_GT(predicted.grad()[0].abs().sum().item<double>(), 0.0);
+  // Without the mask row 1 counts: (200, 100, 50) stds, each |x| - 0.5.
+  const torch::Tensor all =
+      point_loss_sum(predicted.detach(), truth, target_std, 1.0, torch::Tensor());
+  EXPECT_NEAR(all.item<double>(), 3.625 + 348.5, 1e-4);
+}
+
+// hold_static end to end: the checkpoint and its recipe carry it, and the model's rollouts keep
+// the static bodies (the drop scenes' zone) exactly where they were observed while the target
+// falls; the same run without it moves them.
+TEST(TrainerTest, AHoldStaticRunKeepsStaticBodiesPutInItsRollouts) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_hold_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  TrainOptions held = tiny_options((dir / "held.pt").string());
+  held.max_steps = 3;
+  held.model.hold_static = true;
+  const TrainResult r = train_model(held);
+  ASSERT_EQ(r.steps, 3);
+  for (const double loss : r.losses) EXPECT_TRUE(std::isfinite(loss));
+  TrainOptions plain = tiny_options((dir / "plain.pt").string());
+  plain.max_steps = 3;
+  train_model(plain);
+  EXPECT_TRUE(
+      TrainOptions::from_json(read_text_file(recipe_path(held.out)), held.out).model.hold_static);
+
+  std::string scene_path;
+  for (const auto& entry : fs::directory_iterator(dataset_dir())) {
+    if (entry.path().extension() == ".h5") scene_path = entry.path().string();
+  }
+  ASSERT_FALSE(scene_path.empty());
+  const Scene scene = read_scene(scene_path);
+  auto roll = [&](const std::string& checkpoint) {
+    DynamicsModel model = load_checkpoint(checkpoint);
+    const ModelPoints points =
+        build_model_points(scene, checkpoint_sampling(checkpoint, model->config()));
+    RolloutOptions ro;
+    ro.frames = 10;
+    const Rollout rollout = run_rollout(
+        scene, points, [&](const PointState& s) { return model->predict_next(s); }, ro);
+    return std::make_pair(rollout, points.cloud.static_mask(scene));
+  };
+  const auto [held_rollout, mask] = roll(held.out);
+  ASSERT_GT(std::count(mask.begin(), mask.end(), 1), 0);
+  ASSERT_GT(std::count(mask.begin(), mask.end(), 0), 0);
+  double held_static_move = 0.0, held_moving_move = 0.0;
+  const Points& observed = held_rollout.predicted[2];
+  for (int f = 3; f < 10; ++f) {
+    for (Eigen::Index i = 0; i < observed.rows(); ++i) {
+      const double d =
+          (held_rollout.predicted[static_cast<size_t>(f)].row(i) - observed.row(i)).norm();
+      double& largest = mask[static_cast<size_t>(i)] != 0 ? held_static_move : held_moving_move;
+      largest = std::max(largest, d);
+    }
+  }
+  EXPECT_LT(held_static_move, 1e-12);
+  EXPECT_GT(held_moving_move, 1e-4);
+  const auto [plain_rollout, plain_mask] = roll(plain.out);
+  double plain_static_move = 0.0;
+  for (Eigen::Index i = 0; i < observed.rows(); ++i) {
+    if (plain_mask[static_cast<size_t>(i)] != 0) {
+      plain_static_move =
+          std::max(plain_static_move,
+                   (plain_rollout.predicted[9].row(i) - plain_rollout.predicted[2].row(i)).norm());
+    }
+  }
+  EXPECT_GT(plain_static_move, 1e-9);
+  fs::remove_all(dir);
+}
+
 TEST(TrainerTest, VelocityNoisePerPointPerObjectAndCentred) {
   const double sigma = 0.01;
   const int n = 4000;
