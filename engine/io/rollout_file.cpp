@@ -137,6 +137,7 @@ void write_rollout(const Rollout& r, const std::string& path) {
     const h5::Group points = root.create_group("points");
     points.write_matrix("rest", r.rest.data(), n, 3);
     points.write_int_vector("object_ids", r.object_ids);
+    if (!r.static_points.empty()) points.write_uint8_vector("static", r.static_points);
     if (r.faces.rows() > 0) {
       points.write_int_matrix("faces", r.faces.data(), static_cast<hsize_t>(r.faces.rows()), 3);
     }
@@ -199,6 +200,17 @@ Rollout read_rollout(const std::string& path) {
   const int64_t n = r.rest.rows();
   r.object_ids = narrow_ints<int32_t>(points.read_int_vector("object_ids", n));
   if (points.has_dataset("faces")) r.faces = points.read_int_matrix("faces", -1, 3).cast<int32_t>();
+  if (points.has_dataset("static")) {
+    const std::vector<int64_t> flags = points.read_int_vector("static", n);
+    for (size_t i = 0; i < flags.size(); ++i) {
+      if (flags[i] != 0 && flags[i] != 1) {
+        throw FormatError(path, "points/static",
+                          "value " + std::to_string(flags[i]) + " of point " + std::to_string(i) +
+                              " is not 0 or 1");
+      }
+    }
+    r.static_points = narrow_ints<uint8_t>(flags);
+  }
 
   const h5::Group positions = root.group("positions");
   int64_t t = 0;

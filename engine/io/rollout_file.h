@@ -8,6 +8,7 @@
 //   /points/rest           float64 [N,3]  rest coordinates (object frame, scale applied)
 //   /points/object_ids     int32   [N]    Object::id of each point
 //   /points/faces          int32   [F,3]  triangles over the points (mesh input only)
+//   /points/static         uint8   [N]    1 for points of static bodies (absent in older files)
 //   /positions/predicted   float64 [T,N,3] world positions; frames < observed_frames = truth
 //   /positions/truth       float64 [T,N,3]
 //   /poses/object_ids      int32   [O]

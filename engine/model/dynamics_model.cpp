@@ -206,15 +206,26 @@ Points DynamicsModelImpl::predict_next(const PointState& state, HierarchyCache* 
   torch::NoGradGuard no_grad;
   const torch::Device device = velocity_mean_.device();
   const ModelInput input = make_model_input(state, build_hierarchy(state, cache), device);
-  const torch::Tensor delta = predict_delta(input).to(torch::kCPU, torch::kDouble).contiguous();
+  const torch::Tensor delta =
+      hold_static_points(predict_delta(input), state).to(torch::kCPU, torch::kDouble).contiguous();
   Points out = state.position;
-  out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);
-  if (config_.hold_static && !state.static_points.empty()) {
-    for (Eigen::Index i = 0; i < state.size(); ++i) {
-      if (state.static_points[static_cast<size_t>(i)] != 0) out.row(i) = state.position.row(i);
-    }
-  }
+  out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);  // + 0 keeps p(t)
   return out;
+}
+
+torch::Tensor DynamicsModelImpl::hold_static_points(const torch::Tensor& delta,
+                                                    const PointState& state) const {
+  if (!config_.hold_static || state.static_points.empty()) return delta;
+  if (static_cast<int64_t>(state.static_points.size()) != delta.size(0)) {
+    throw ValueError("static_points", std::to_string(state.static_points.size()) +
+                                          " flags for a prediction of " +
+                                          std::to_string(delta.size(0)) + " points");
+  }
+  const torch::Tensor held =
+      torch::from_blob(const_cast<uint8_t*>(state.static_points.data()),
+                       {static_cast<int64_t>(state.static_points.size()), 1}, torch::kUInt8)
+          .to(delta.device(), torch::kBool);
+  return delta.masked_fill(held, 0.0);
 }
 
 NormStats DynamicsModelImpl::stats() const {

@@ -50,6 +50,9 @@ class DynamicsModelImpl : public torch::nn::Module {
   torch::Tensor forward(const ModelInput& input, std::vector<BlockRecord>* record = nullptr);
   /// p̂(t+1) − p(t) `[N,3]` float32 (scene units per frame).
   torch::Tensor predict_delta(const ModelInput& input);
+  /// `delta` (predict_delta on `state`) with the rows of the state's static points set to 0 where
+  /// the model holds static bodies (ModelConfig::hold_static); else `delta` itself. Differentiable.
+  torch::Tensor hold_static_points(const torch::Tensor& delta, const PointState& state) const;
   /// p̂(t+1) `[N,3]` float64 (differentiable with respect to the weights).
   torch::Tensor predict_positions(const ModelInput& input);
   /// (target − mean) / std for a target `[N,3]` in scene units per frame (for normalised losses).

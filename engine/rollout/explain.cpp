@@ -173,6 +173,7 @@ Explanation RolloutExplainer::explain(const Rollout& rollout,
   PointState state = PointState::from_positions(rollout.predicted[f], rollout.predicted[f - 1],
                                                 rollout.predicted[f - 2], rollout.object_ids);
   state.faces = rollout.faces;
+  state.static_points = rollout.static_points;
 
   std::lock_guard<std::mutex> lock(impl_->mutex);
   DynamicsModel& model = impl_->model;
@@ -202,7 +203,8 @@ Explanation RolloutExplainer::explain(const Rollout& rollout,
       }
     }
 
-    const torch::Tensor delta = model->predict_delta(input);  // [N,3] float32
+    // [N,3] float32; static points held where the model holds them, as in its rollouts.
+    const torch::Tensor delta = model->hold_static_points(model->predict_delta(input), state);
     const torch::Tensor chosen =
         torch::tensor(std::vector<int64_t>(out.points.begin(), out.points.end()), torch::kInt64);
     torch::Tensor per_point;  // [S,3]

@@ -39,6 +39,7 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
   r.rest = cloud.rest;
   r.object_ids = cloud.object_id;
   r.faces = points.faces;
+  r.static_points = static_points;
 
   const int target = scene.find_role(Role::kTarget);
   const int zone = scene.find_role(Role::kZone);

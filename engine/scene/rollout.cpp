@@ -24,6 +24,7 @@ void Rollout::validate() const {
   const auto t = static_cast<size_t>(num_frames());
   const auto o = static_cast<size_t>(num_objects());
   check_size("object_ids", object_ids.size(), n, "one per point");
+  if (!static_points.empty()) check_size("static_points", static_points.size(), n, "one per point");
   check_size("truth", truth.size(), t, "one per frame");
   check_size("poses", poses.size(), t, "one per frame");
   check_size("point_error", point_error.size(), t, "one per frame");

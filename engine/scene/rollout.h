@@ -24,6 +24,9 @@ struct Rollout {
   Points rest = Points(0, 3);       ///< `[N,3]` rest coordinates (object frame, scale applied).
   std::vector<int32_t> object_ids;  ///< `[N]` Object::id of each point.
   Faces faces = Faces(0, 3);        ///< `[F,3]` triangles over the points (mesh input; else empty).
+  /// `[N]` 1 for the points of static bodies (ScenePointCloud::static_mask), which a model that
+  /// holds static bodies (ModelConfig::hold_static) keeps in place; empty in older files.
+  std::vector<uint8_t> static_points;
 
   std::vector<Points> predicted;  ///< `[T]` of `[N,3]` predicted positions.
   std::vector<Points> truth;      ///< `[T]` of `[N,3]` ground-truth positions.

@@ -53,6 +53,11 @@ struct SceneData {
   std::vector<Points> frames;
   std::vector<uint8_t> static_points;  // ScenePointCloud::static_mask
   int64_t moving_points = 0;           // points not in static_points
+
+  // The points a model's loss counts in this scene: the moving ones where it holds static bodies.
+  int64_t loss_points(const ModelConfig& c) const {
+    return c.hold_static ? moving_points : points.size();
+  }
 };
 
 SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
@@ -113,6 +118,7 @@ struct PreparedBatch {
 // Builds every example's hierarchy and tensors. Reads only the model's configuration, so it may
 // run on another thread while the model trains.
 PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Example>& examples) {
+  const bool hold_static = model.config().hold_static;
   std::vector<ModelInput> inputs;
   std::vector<torch::Tensor> truths;
   std::vector<float> moving;
@@ -121,6 +127,7 @@ PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Ex
     inputs.push_back(make_model_input(e.state, model.build_hierarchy(e.state)));
     truths.push_back(points_to_tensor(e.next));
     b.points += e.state.size();
+    if (!hold_static) continue;
     for (Eigen::Index i = 0; i < e.state.size(); ++i) {
       moving.push_back(e.state.static_points.empty() ||
                                e.state.static_points[static_cast<size_t>(i)] == 0
@@ -130,7 +137,7 @@ PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Ex
   }
   b.input = concatenate_inputs(inputs);
   b.truth = torch::cat(truths);
-  if (model.config().hold_static) {
+  if (hold_static) {
     b.moving =
         torch::from_blob(moving.data(), {static_cast<int64_t>(moving.size()), 1}, torch::kFloat)
             .clone();
@@ -381,7 +388,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     int64_t global_points = 0;
     for (int64_t b = first; b < std::min(first + global_batch, draws); ++b) {
       const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
-      global_points += model->config().hold_static ? d.moving_points : d.points.size();
+      global_points += d.loss_points(model->config());
       if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
       const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
       Example e = make_example(d, t, o, &rng);
@@ -492,7 +499,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
           const Example e = make_example(
               d, std::max(2, std::min(t, static_cast<int>(d.frames.size()) - 2)), o, nullptr);
           sum += batch_loss(model, prepare_batch(*model, {e}), o.huber_delta).item<double>();
-          n += (model->config().hold_static ? d.moving_points : e.state.size()) * 3;
+          n += d.loss_points(model->config()) * 3;
           RolloutOptions ro;
           ro.observed_frames = 3;
           ro.frames = std::min(d.scene.num_frames(), std::max(o.val_frames, 4));

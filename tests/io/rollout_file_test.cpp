@@ -49,6 +49,7 @@ Rollout make_rollout(bool contact) {
   }
   r.pose_object_ids = {1, 2};
   r.pose_rigid = {1, 0};
+  if (contact) r.static_points = {0, 0, 1, 1, 1};  // the other variant: a file without the flags
   return r;
 }
 
@@ -63,6 +64,7 @@ void expect_equal(const Rollout& a, const Rollout& b) {
   EXPECT_EQ(a.rest, b.rest);
   EXPECT_EQ(a.object_ids, b.object_ids);
   EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.static_points, b.static_points);
   ASSERT_EQ(a.num_frames(), b.num_frames());
   for (int f = 0; f < a.num_frames(); ++f) {
     EXPECT_EQ(a.predicted[f], b.predicted[f]);
@@ -96,6 +98,33 @@ TEST(RolloutFileTest, InconsistentRolloutIsNotWritten) {
   fs::remove(path);
   EXPECT_THROW(write_rollout(r, path), ValueError);
   EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(RolloutFileTest, StaticFlagsAreOnePerPointAndZeroOrOne) {
+  Rollout r = make_rollout(true);
+  r.static_points.pop_back();
+  const std::string bad = temp_path("static_short");
+  fs::remove(bad);
+  EXPECT_THROW(write_rollout(r, bad), ValueError);
+  EXPECT_FALSE(fs::exists(bad));
+
+  const std::string path = temp_path("static_two");
+  write_rollout(make_rollout(true), path);
+  {
+    h5::Handle file(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    ASSERT_TRUE(file.valid());
+    h5::Handle ds(H5Dopen2(file.get(), "points/static", H5P_DEFAULT));
+    ASSERT_TRUE(ds.valid());
+    const uint8_t flags[5] = {0, 0, 1, 2, 1};
+    ASSERT_GE(H5Dwrite(ds.get(), H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, flags), 0);
+  }
+  try {
+    read_rollout(path);
+    FAIL();
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.field(), "points/static");
+    EXPECT_NE(std::string(e.what()).find("point 3"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RolloutFileTest, FindsTheSceneAtItsPathOrNextToTheRollout) {

@@ -327,6 +327,45 @@ TEST(Explain, AccelerationTargetAndMeshInput) {
   EXPECT_THROW(parse_explain_target("loss"), ValueError);
 }
 
+// A model that holds static bodies predicts p(t) for their points, so an explanation of such a
+// point has its error and no contributor, while the moving points are explained as without flags.
+TEST(Explain, AModelThatHoldsStaticBodiesExplainsTheHeldPrediction) {
+  const TestScene scene = make_scene(3, 20, 23);
+  Rollout flagged = make_rollout(scene);
+  flagged.static_points.assign(60, 0);
+  for (int i = 20; i < 40; ++i) flagged.static_points[static_cast<size_t>(i)] = 1;  // object 11
+  Rollout unflagged = flagged;
+  unflagged.static_points.clear();
+  ModelConfig config = tiny_config();
+  config.hold_static = true;
+  const CheckpointFile file("held", make_model(config, 9));
+  const RolloutExplainer explainer(file.path());
+  ExplainSelection s;
+  s.frame = 4;
+
+  s.point = 25;
+  const Explanation held = explainer.explain(flagged, s);
+  const Vec3 stays = flagged.predicted[4].row(25) - flagged.truth[5].row(25);
+  EXPECT_NEAR(held.value, stays.norm(), 1e-12);
+  EXPECT_TRUE(held.contributors.empty());
+  EXPECT_EQ(held.edge_total, 0.0);
+  const Explanation free = explainer.explain(unflagged, s);  // no flags: the network's own output
+  EXPECT_GT(std::abs(free.value - stays.norm()), 1e-6);
+  EXPECT_FALSE(free.contributors.empty());
+
+  s.point = -1;
+  s.object = 12;
+  const Explanation a = explainer.explain(flagged, s);
+  const Explanation b = explainer.explain(unflagged, s);
+  EXPECT_NEAR(a.value, b.value, 1e-9);
+  ASSERT_EQ(a.contributors.size(), b.contributors.size());
+  ASSERT_FALSE(a.contributors.empty());
+  for (size_t i = 0; i < a.contributors.size(); ++i) {
+    EXPECT_EQ(a.contributors[i].list, b.contributors[i].list);
+    EXPECT_NEAR(a.contributors[i].share, b.contributors[i].share, 1e-6);
+  }
+}
+
 TEST(Explain, BadSelectionsAreClearErrors) {
   const TestScene scene = make_scene(2, 20, 17);
   const Rollout r = make_rollout(scene);

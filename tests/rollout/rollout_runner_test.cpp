@@ -32,6 +32,18 @@ TEST(RolloutRunnerTest, OracleRolloutReproducesTruthAndPoses) {
   }
 }
 
+TEST(RolloutRunnerTest, RecordsThePointsOfStaticBodies) {
+  Scene scene = testing::make_moving_boxes(6, 0.25);
+  scene.objects[1].mass = 0.0;  // the zone pad: static
+  const ModelPoints points = build_model_points(scene, SamplingOptions{InputMode::kPoints, 0.05});
+  const Rollout r =
+      run_rollout(scene, points, testing::oracle_predictor(scene, points), RolloutOptions{});
+  ASSERT_EQ(r.static_points.size(), static_cast<size_t>(points.cloud.size()));
+  for (size_t i = 0; i < r.static_points.size(); ++i) {
+    EXPECT_EQ(r.static_points[i], r.object_ids[i] == 2 ? 1 : 0) << i;
+  }
+}
+
 TEST(RolloutRunnerTest, ConstantVelocityBaselineIsExactForUniformMotionWithoutGravity) {
   Scene scene = testing::make_moving_boxes(8, 0.3);
   for (Pose& p : scene.trajectories[0].poses) p.rotation = Quat::Identity();
