@@ -166,7 +166,6 @@ ModelTrace capture_trace(const std::string& checkpoint_path, const Scene& scene,
       PointState::from_positions(points.positions(scene, frame), points.positions(scene, frame - 1),
                                  points.positions(scene, frame - 2), points.cloud.object_id);
   state.faces = points.faces;
-  state.static_points = points.cloud.static_mask(scene);
   ModelTrace t = capture_with(checkpoint_path, state, frame, queries);
   t.source = kTraceSourceScene;
   return t;
@@ -186,7 +185,6 @@ ModelTrace capture_rollout_trace(const std::string& checkpoint_path, const Rollo
   PointState state = PointState::from_positions(rollout.predicted[f], rollout.predicted[f - 1],
                                                 rollout.predicted[f - 2], rollout.object_ids);
   state.faces = rollout.faces;
-  state.static_points = rollout.static_points;
   ModelTrace t = capture_with(checkpoint_path, state, frame, queries);
   t.source = kTraceSourceRollout;
   t.scene_path = rollout.scene_path;
