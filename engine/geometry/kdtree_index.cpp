@@ -2,6 +2,7 @@
 #include "engine/geometry/kdtree_index.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <nanoflann.hpp>
 #include <string>
@@ -19,6 +20,8 @@ constexpr double kBoundSlack = 1e-9;
 // Points per leaf (and the size below which a scan answers): of 6, 12 and 24, 24 was fastest for
 // K = 16 on object surfaces in geometry_bench.
 constexpr size_t kLeafSize = 24;
+// knn_self keeps a leaf's candidates in a 32-bit mask.
+static_assert(kLeafSize <= 32);
 
 // True when (sq_dist, index) orders before `b`: nearer, or as near with a lower index.
 bool neighbor_before(double sq_dist, int32_t index, const Neighbor& b) {
@@ -33,7 +36,9 @@ bool neighbor_less(const Neighbor& a, const Neighbor& b) {
 // buffer of at least k entries.
 class NearestSet {
  public:
-  NearestSet(Neighbor* buffer, size_t k) : buffer_(buffer), k_(k) {}
+  // `count` entries of `buffer` already hold the set's first members, sorted.
+  NearestSet(Neighbor* buffer, size_t k, size_t count = 0)
+      : buffer_(buffer), k_(k), count_(count) {}
 
   size_t size() const { return count_; }
   bool full() const { return count_ == k_; }
@@ -171,12 +176,82 @@ struct KdIndex::Tree {
       index.vAcc[slot] = static_cast<uint32_t>(slot);
     }
     xyz.swap(sorted);
+    cells.reserve(2 * original.size() / kLeafSize + 2);
+    flatten(index.root_node);
+  }
+
+  // A node of the tree with the tight box of its points (storage slots begin .. end - 1).
+  struct Cell {
+    std::array<double, 3> lo, hi;
+    std::array<int32_t, 2> child;  // {-1, -1} for a leaf
+    uint32_t begin, end;
+  };
+
+  // Squared distance between two boxes. Rounding is monotone and the summation order is
+  // squared_distance()'s, so it is never above the computed distance of a point of one box to a
+  // point of the other: pruning with it cannot lose a neighbour.
+  static double box_distance(const Cell& a, const Cell& b) {
+    double s = 0.0;
+    for (int d = 0; d < 3; ++d) {
+      const double gap = std::max(0.0, std::max(a.lo[d] - b.hi[d], b.lo[d] - a.hi[d]));
+      s += gap * gap;
+    }
+    return s;
+  }
+
+  // The same for one point and a box.
+  static double point_box_distance(const double* p, const Cell& b) {
+    double s = 0.0;
+    for (int d = 0; d < 3; ++d) {
+      const double gap = std::max(0.0, std::max(b.lo[d] - p[d], p[d] - b.hi[d]));
+      s += gap * gap;
+    }
+    return s;
+  }
+
+  // Copies the subtree of `node` into `cells` (children after their parent) and returns its cell.
+  int32_t flatten(const Index::Node* node) {
+    const auto id = static_cast<int32_t>(cells.size());
+    cells.emplace_back();
+    if (node->child1 == nullptr && node->child2 == nullptr) {
+      Cell c{};
+      c.child = {-1, -1};
+      c.begin = static_cast<uint32_t>(node->node_type.lr.left);
+      c.end = static_cast<uint32_t>(node->node_type.lr.right);
+      c.lo.fill(std::numeric_limits<double>::infinity());
+      c.hi.fill(-std::numeric_limits<double>::infinity());
+      for (uint32_t slot = c.begin; slot < c.end; ++slot) {
+        for (int d = 0; d < 3; ++d) {
+          c.lo[d] = std::min(c.lo[d], xyz[3 * slot + d]);
+          c.hi[d] = std::max(c.hi[d], xyz[3 * slot + d]);
+        }
+      }
+      cells[static_cast<size_t>(id)] = c;
+      leaves.push_back(id);
+      return id;
+    }
+    const int32_t a = flatten(node->child1);
+    const int32_t b = flatten(node->child2);
+    const Cell& ca = cells[static_cast<size_t>(a)];
+    const Cell& cb = cells[static_cast<size_t>(b)];
+    Cell c{};
+    c.child = {a, b};
+    c.begin = std::min(ca.begin, cb.begin);
+    c.end = std::max(ca.end, cb.end);
+    for (int d = 0; d < 3; ++d) {
+      c.lo[d] = std::min(ca.lo[d], cb.lo[d]);
+      c.hi[d] = std::max(ca.hi[d], cb.hi[d]);
+    }
+    cells[static_cast<size_t>(id)] = c;
+    return id;
   }
 
   std::vector<double> xyz;
   std::vector<int32_t> original;  // input index of the point in each storage slot
   Source source;
   Index index;
+  std::vector<Cell> cells;      // cells[0] is the root
+  std::vector<int32_t> leaves;  // the leaf cells
 };
 
 KdIndex::KdIndex(const Points& points, const char* what) : points_(points) {
@@ -222,6 +297,91 @@ void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& ou
   tree_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
   std::sort(out.begin(), out.end(),
             [](const Neighbor& a, const Neighbor& b) { return neighbor_less(a, b); });
+}
+
+size_t KdIndex::self_groups() const {
+  if (tree_) return tree_->leaves.size();
+  return points_.rows() > 0 ? 1 : 0;
+}
+
+void KdIndex::knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
+                       const SelfAnswer& answer) const {
+  if (k <= 0 || group >= self_groups()) return;
+  const auto wanted = std::min(static_cast<size_t>(k), static_cast<size_t>(points_.rows()));
+  if (!tree_) {
+    for (Eigen::Index i = 0; i < points_.rows(); ++i) {
+      knn(point(i), k, scratch);
+      answer(i, scratch.data(), scratch.size());
+    }
+    return;
+  }
+  using Cell = Tree::Cell;
+  const Tree& t = *tree_;
+  const Cell& own = t.cells[static_cast<size_t>(t.leaves[group])];
+  const uint32_t queries = own.end - own.begin;
+  scratch.resize(static_cast<size_t>(queries) * wanted);
+  std::array<size_t, kLeafSize> count{};
+  // Offers every point of `leaf` to every query of the group whose k-th distance can reach it.
+  auto visit = [&](const Cell& leaf) {
+    std::array<double, kLeafSize> d{};
+    const uint32_t n = leaf.end - leaf.begin;
+    for (uint32_t qi = 0; qi < queries; ++qi) {
+      const double* q = &t.xyz[3 * (own.begin + qi)];
+      Neighbor* best = &scratch[qi * wanted];
+      size_t c = count[qi];
+      const bool full = c == wanted;
+      if (full && Tree::point_box_distance(q, leaf) > widen(best[wanted - 1].sq_dist)) continue;
+      for (uint32_t j = 0; j < n; ++j) {
+        const double* p = &t.xyz[3 * (leaf.begin + j)];
+        const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+        d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+      }
+      // Candidates at or below the k-th distance as a bit mask, computed without branches; only
+      // those are inserted, in index order within the leaf.
+      const double limit =
+          full ? best[wanted - 1].sq_dist : std::numeric_limits<double>::infinity();
+      uint32_t mask = 0;
+      for (uint32_t j = 0; j < n; ++j) mask |= static_cast<uint32_t>(d[j] <= limit) << j;
+      NearestSet set(best, wanted, c);
+      while (mask != 0) {
+        const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
+        mask &= mask - 1;
+        set.add(d[j], t.original[leaf.begin + j]);
+      }
+      count[qi] = set.size();
+    }
+  };
+  // The largest k-th distance of the group's queries (infinite while one has fewer than k).
+  auto group_bound = [&]() {
+    double bound = 0.0;
+    for (uint32_t qi = 0; qi < queries; ++qi) {
+      if (count[qi] < wanted) return std::numeric_limits<double>::infinity();
+      bound = std::max(bound, scratch[qi * wanted + wanted - 1].sq_dist);
+    }
+    return bound;
+  };
+  visit(own);
+  double bound = group_bound();
+  std::vector<int32_t> stack{0};
+  while (!stack.empty()) {
+    const Cell& cell = t.cells[static_cast<size_t>(stack.back())];
+    stack.pop_back();
+    if (&cell == &own || Tree::box_distance(own, cell) > widen(bound)) continue;
+    if (cell.child[0] < 0) {
+      visit(cell);
+      bound = group_bound();
+      continue;
+    }
+    // The nearer child is visited first (pushed last).
+    const int32_t a = cell.child[0], b = cell.child[1];
+    const bool a_first = Tree::box_distance(own, t.cells[static_cast<size_t>(a)]) <=
+                         Tree::box_distance(own, t.cells[static_cast<size_t>(b)]);
+    stack.push_back(a_first ? b : a);
+    stack.push_back(a_first ? a : b);
+  }
+  for (uint32_t qi = 0; qi < queries; ++qi) {
+    answer(t.original[own.begin + qi], &scratch[qi * wanted], count[qi]);
+  }
 }
 
 }  // namespace dynscope

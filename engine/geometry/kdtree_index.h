@@ -1,7 +1,9 @@
 // Exact double-precision nearest-neighbour and radius queries over a fixed point set.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -50,6 +52,21 @@ class KdIndex {
   /// Replaces `out` with every point whose squared distance to `query` is <= radius², sorted.
   /// Throws ValueError for a non-finite query.
   void radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const;
+
+  /// Receives one indexed point's answer from knn_self: its index and its sorted neighbours.
+  using SelfAnswer = std::function<void(Eigen::Index point, const Neighbor* nearest, size_t count)>;
+  /// Number of groups of indexed points that knn_self answers together (the tree's leaves; one
+  /// for a set too small for a tree, none for an empty one).
+  size_t self_groups() const;
+  /// The indexed points' own k nearest (each point included), for every point of group `group`:
+  /// calls answer(i, nearest, count) with what knn(point(i), k) returns, once per point of the
+  /// group. Faster than one knn() per point: the tree is walked once per group against the
+  /// group's box, each point skips the leaves its own k-th distance cannot reach, and a leaf's
+  /// distances are computed together and only those within the k-th distance are inserted.
+  /// `scratch` is the caller's buffer (one per thread); groups may run concurrently. Nothing is
+  /// called for k <= 0 or a group out of range.
+  void knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
+                const SelfAnswer& answer) const;
 
  private:
   struct Tree;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "engine/core/error.h"
 #include "engine/core/threads.h"
@@ -47,14 +48,19 @@ NeighborList empty_list(Eigen::Index rows, int k) {
   return out;
 }
 
-void write_row(NeighborList& out, Eigen::Index row, const std::vector<Neighbor>& found,
+void write_row(NeighborList& out, Eigen::Index row, const Neighbor* found, size_t count,
                const std::vector<int32_t>* global) {
-  for (size_t j = 0; j < found.size(); ++j) {
+  for (size_t j = 0; j < count; ++j) {
     const auto col = static_cast<Eigen::Index>(j);
     out.index(row, col) =
         global != nullptr ? (*global)[static_cast<size_t>(found[j].index)] : found[j].index;
     out.mask(row, col) = 1;
   }
+}
+
+void write_row(NeighborList& out, Eigen::Index row, const std::vector<Neighbor>& found,
+               const std::vector<int32_t>* global) {
+  write_row(out, row, found.data(), found.size(), global);
 }
 
 double squared_distance_to_box(const Vec3& p, const Aabb& box) {
@@ -77,9 +83,67 @@ void for_each_query(Eigen::Index rows, const Answer& answer) {
   }
 }
 
+// Calls task(i, scratch) for i in 0 .. tasks - 1 (groups of queries answered together by
+// KdIndex::knn_self), in parallel on the compute threads when there are `rows` >=
+// kMinParallelQueries queries in all. Each group writes only its own rows.
+template <typename Task>
+void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
+  const int threads = rows >= kMinParallelQueries ? compute_threads() : 1;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    std::vector<Neighbor> scratch;
+#pragma omp for schedule(dynamic, 4)
+    for (size_t i = 0; i < tasks; ++i) task(i, scratch);
+  }
+}
+
+// True when the queries are the tree's own points, in its order (a same-level list).
+bool queries_are_indexed(const Points& query, const KdIndex& source) {
+  if (query.rows() != source.size()) return false;
+  for (Eigen::Index i = 0; i < query.rows(); ++i) {
+    if (query.row(i).transpose() != source.point(i)) return false;
+  }
+  return true;
+}
+
+// True when the queries are exactly the indexed points, each with its object's id.
+bool queries_are_indexed(const Points& query, const std::vector<int32_t>& query_ids,
+                         const ObjectIndex& source) {
+  if (query.rows() != source.size()) return false;
+  for (const ObjectIndex::Object& object : source.objects()) {
+    for (size_t j = 0; j < object.global.size(); ++j) {
+      const int32_t row = object.global[j];
+      if (query_ids[static_cast<size_t>(row)] != object.id ||
+          query.row(row).transpose() != object.tree.point(static_cast<Eigen::Index>(j))) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// knn_same_object when the queries are the indexed points: each object's tree answers its own
+// points a leaf at a time (KdIndex::knn_self), the same lists as one search per query.
+NeighborList same_object_self_rows(const ObjectIndex& source, int k) {
+  NeighborList out = empty_list(source.size(), k);
+  std::vector<std::pair<const ObjectIndex::Object*, size_t>> groups;
+  for (const ObjectIndex::Object& object : source.objects()) {
+    for (size_t g = 0; g < object.tree.self_groups(); ++g) groups.emplace_back(&object, g);
+  }
+  for_each_group(groups.size(), source.size(), [&](size_t i, std::vector<Neighbor>& scratch) {
+    const ObjectIndex::Object& object = *groups[i].first;
+    object.tree.knn_self(
+        groups[i].second, k, scratch, [&](Eigen::Index local, const Neighbor* found, size_t count) {
+          write_row(out, object.global[static_cast<size_t>(local)], found, count, &object.global);
+        });
+  });
+  return out;
+}
+
 // The rows of knn_same_object; inputs already checked.
 NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& query_ids,
                               const ObjectIndex& source, int k) {
+  if (queries_are_indexed(query, query_ids, source)) return same_object_self_rows(source, k);
   NeighborList out = empty_list(query.rows(), k);
   for_each_query(
       query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found, std::vector<Neighbor>&) {
@@ -124,6 +188,15 @@ NeighborList other_object_rows(const Points& query, const std::vector<int32_t>& 
 // The rows of knn_all; inputs already checked.
 NeighborList all_rows(const Points& query, const KdIndex& source, int k) {
   NeighborList out = empty_list(query.rows(), k);
+  if (queries_are_indexed(query, source)) {
+    for_each_group(
+        source.self_groups(), query.rows(), [&](size_t g, std::vector<Neighbor>& scratch) {
+          source.knn_self(g, k, scratch, [&](Eigen::Index i, const Neighbor* found, size_t count) {
+            write_row(out, i, found, count, nullptr);
+          });
+        });
+    return out;
+  }
   for_each_query(query.rows(),
                  [&](Eigen::Index i, std::vector<Neighbor>& found, std::vector<Neighbor>&) {
                    source.knn(query.row(i).transpose(), k, found);

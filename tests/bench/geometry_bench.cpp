@@ -173,6 +173,31 @@ void BM_KnnAllPrebuiltTree(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
 
+// The same queries one search per point (KdIndex::knn, parallel over points), as knn_all answered
+// a tree's own points before the leaf-batched search (KdIndex::knn_self).
+void BM_KnnAllPrebuiltTreePerQuery(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  const ThreadScope threads(state);
+  const KdIndex tree(c.points);
+  const Eigen::Index n = c.points.rows();
+  for (auto _ : state) {
+    IndexMatrix index(n, kK);
+#pragma omp parallel num_threads(static_cast <int>(state.range(1)))
+    {
+      std::vector<Neighbor> found;
+#pragma omp for schedule(dynamic, 64)
+      for (Eigen::Index i = 0; i < n; ++i) {
+        tree.knn(c.points.row(i).transpose(), kK, found);
+        for (size_t j = 0; j < found.size(); ++j) {
+          index(i, static_cast<Eigen::Index>(j)) = found[j].index;
+        }
+      }
+    }
+    benchmark::DoNotOptimize(index.data());
+  }
+  state.SetItemsProcessed(state.iterations() * n);
+}
+
 void BM_PclKnnAll(benchmark::State& state) {
   const Cloud& c = cloud(state.range(0));
   if (!same_lists(legacy::knn_all(c.points, c.points, kK), knn_all(c.points, c.points, kK))) {
@@ -299,6 +324,7 @@ void hierarchy_args(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_KnnAll)->Apply(library_args);
 BENCHMARK(BM_KnnAllPrebuiltTree)->Apply(library_args);
+BENCHMARK(BM_KnnAllPrebuiltTreePerQuery)->Apply(library_args);
 BENCHMARK(BM_PclKnnAll)->Apply(serial_args);
 BENCHMARK(BM_BruteForceKnnAll_1000Queries)->Apply(serial_args);
 BENCHMARK(BM_KnnSameObject)->Apply(library_args);

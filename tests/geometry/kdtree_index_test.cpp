@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
@@ -94,6 +95,68 @@ TEST(KdIndexTest, TiesAndDuplicatesResolveToTheLowestIndex) {
         expect_same(found, within);
       }
     }
+  }
+}
+
+// Every point's own answer from knn_self, by point; each point must be answered exactly once.
+std::vector<std::vector<Neighbor>> self_answers(const KdIndex& index, int k) {
+  std::vector<std::vector<Neighbor>> answers(static_cast<size_t>(index.size()));
+  std::vector<int> calls(answers.size(), 0);
+  std::vector<Neighbor> scratch;
+  for (size_t g = 0; g < index.self_groups(); ++g) {
+    index.knn_self(g, k, scratch, [&](Eigen::Index i, const Neighbor* found, size_t count) {
+      answers[static_cast<size_t>(i)].assign(found, found + count);
+      ++calls[static_cast<size_t>(i)];
+    });
+  }
+  for (size_t i = 0; i < calls.size(); ++i) EXPECT_EQ(calls[i], 1) << "point " << i;
+  return answers;
+}
+
+TEST(KdIndexTest, SelfQueriesEqualOneSearchPerPoint) {
+  // Points on a sphere's surface (as objects are sampled), a lattice full of duplicates and
+  // ties, and sets at and below the leaf size; k below, at and above a leaf's 24 points and
+  // above the set's size.
+  Rng rng(21);
+  Points sphere(3000, 3);
+  for (Eigen::Index i = 0; i < sphere.rows(); ++i) {
+    const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+    sphere.row(i) = (0.4 * v.normalized() + Vec3(1, -2, 0.5)).transpose();
+  }
+  const Points clouds[] = {sphere,
+                           lattice_cloud(5, 700, Vec3::Zero()),
+                           lattice_cloud(6, 700, Vec3(1e6, -3e6, 2.5e5)),
+                           lattice_cloud(7, 24, Vec3::Zero()),
+                           lattice_cloud(8, 25, Vec3::Zero()),
+                           Points(0, 3)};
+  for (const Points& points : clouds) {
+    const KdIndex index(points);
+    EXPECT_EQ(index.self_groups() == 0, points.rows() == 0);
+    for (const int k : {1, 16, 24, 40, 100}) {
+      if (k == 100 && points.rows() > 30) continue;  // more than the set: only the tiny sets
+      const std::vector<std::vector<Neighbor>> answers = self_answers(index, k);
+      std::vector<Neighbor> expected;
+      for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        index.knn(points.row(i).transpose(), k, expected);
+        SCOPED_TRACE("n " + std::to_string(points.rows()) + " k " + std::to_string(k) + " point " +
+                     std::to_string(i));
+        expect_same(answers[static_cast<size_t>(i)], expected);
+        if (i % 10 == 0) {  // and against brute force for a tenth of the points
+          const std::vector<Neighbor> all = brute_force(points, points.row(i).transpose());
+          const auto keep = std::min(all.size(), static_cast<size_t>(k));
+          expect_same(answers[static_cast<size_t>(i)],
+                      std::vector<Neighbor>(all.begin(), all.begin() + keep));
+        }
+        if (HasFatalFailure()) return;
+      }
+    }
+    // Nothing is answered for k <= 0 or a group out of range.
+    std::vector<Neighbor> scratch;
+    int calls = 0;
+    const auto count_calls = [&](Eigen::Index, const Neighbor*, size_t) { ++calls; };
+    index.knn_self(0, 0, scratch, count_calls);
+    index.knn_self(index.self_groups(), 4, scratch, count_calls);
+    EXPECT_EQ(calls, 0);
   }
 }
 
