@@ -173,6 +173,13 @@ void BM_KnnAllPrebuiltTree(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
 
+// Building the tree alone (what BM_KnnAll adds to BM_KnnAllPrebuiltTree).
+void BM_KdIndexBuild(benchmark::State& state) {
+  const Cloud& c = cloud(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(KdIndex(c.points).size());
+  state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
 // The same queries one search per point (KdIndex::knn, parallel over points), as knn_all answered
 // a tree's own points before the leaf-batched search (KdIndex::knn_self).
 void BM_KnnAllPrebuiltTreePerQuery(benchmark::State& state) {
@@ -325,6 +332,7 @@ void hierarchy_args(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_KnnAll)->Apply(library_args);
 BENCHMARK(BM_KnnAllPrebuiltTree)->Apply(library_args);
 BENCHMARK(BM_KnnAllPrebuiltTreePerQuery)->Apply(library_args);
+BENCHMARK(BM_KdIndexBuild)->Apply(serial_args);
 BENCHMARK(BM_PclKnnAll)->Apply(serial_args);
 BENCHMARK(BM_BruteForceKnnAll_1000Queries)->Apply(serial_args);
 BENCHMARK(BM_KnnSameObject)->Apply(library_args);
