@@ -7,6 +7,7 @@
 #include <climits>
 #include <cstdlib>
 
+#include "engine/core/allocator.h"
 #include "engine/core/threads.h"
 
 namespace dynscope {
@@ -43,6 +44,7 @@ std::vector<std::pair<std::string, std::string>> system_context() {
   out.emplace_back("cores", std::to_string(available_cores()));
   out.emplace_back("compute_threads", std::to_string(compute_threads()));
   out.emplace_back("openmp_threads", std::to_string(omp_get_max_threads()));
+  out.emplace_back("allocator", allocator_settings());
   const BlasInfo blas = blas_info();
   out.emplace_back("blas", blas.library.empty() ? "none mapped" : blas.library);
   if (!blas.config.empty()) out.emplace_back("blas_config", blas.config);

@@ -20,7 +20,8 @@ struct BlasInfo {
 BlasInfo blas_info();
 
 /// Key/value lines describing the machine and this process's compute setup (cores, compute
-/// threads, OpenMP threads, BLAS library and threads, a warning line for the reference BLAS).
+/// threads, OpenMP threads, heap settings, BLAS library and threads, a warning line for the
+/// reference BLAS).
 std::vector<std::pair<std::string, std::string>> system_context();
 
 }  // namespace dynscope

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -15,6 +17,8 @@ namespace {
 
 // Below this many queries a parallel region costs more than it saves.
 constexpr Eigen::Index kMinParallelQueries = 256;
+// Below this many source points an ObjectIndex builds its objects' trees on one thread.
+constexpr Eigen::Index kMinParallelTreePoints = 2048;
 // Queries per scheduling chunk: large enough to amortise scheduling, small enough that a thread
 // slowed down by a busy core does not hold the others up.
 constexpr int kQueryChunk = 64;
@@ -223,20 +227,43 @@ ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
   std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
     return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
   });
+  std::vector<std::pair<size_t, size_t>> ranges;  // each object's run of `order`
   for (size_t begin = 0; begin < order.size();) {
     const int32_t id = ids[static_cast<size_t>(order[begin])];
     size_t end = begin;
     while (end < order.size() && ids[static_cast<size_t>(order[end])] == id) ++end;
-    std::vector<int32_t> global(order.begin() + static_cast<std::ptrdiff_t>(begin),
-                                order.begin() + static_cast<std::ptrdiff_t>(end));
-    Points local(static_cast<Eigen::Index>(global.size()), 3);
-    for (size_t j = 0; j < global.size(); ++j) {
-      local.row(static_cast<Eigen::Index>(j)) = points.row(global[j]);
-    }
-    const Aabb box = Aabb::of(local);
-    objects_.push_back(Object{id, std::move(global), KdIndex(local, "source"), box});
+    ranges.emplace_back(begin, end);
     begin = end;
   }
+  // The objects' trees are independent: built in parallel on the compute threads when there are
+  // enough points for it to pay, each into its own slot, so the result does not depend on the
+  // thread count. A tree's error (a coordinate beyond 1e18) is rethrown here, not inside the
+  // parallel region.
+  std::vector<std::optional<Object>> built(ranges.size());
+  std::vector<std::exception_ptr> failed(ranges.size());
+  const int threads = ranges.size() > 1 && size_ >= kMinParallelTreePoints ? compute_threads() : 1;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (threads > 1)
+  for (size_t r = 0; r < ranges.size(); ++r) {
+    try {
+      const auto [begin, end] = ranges[r];
+      std::vector<int32_t> global(order.begin() + static_cast<std::ptrdiff_t>(begin),
+                                  order.begin() + static_cast<std::ptrdiff_t>(end));
+      Points local(static_cast<Eigen::Index>(global.size()), 3);
+      for (size_t j = 0; j < global.size(); ++j) {
+        local.row(static_cast<Eigen::Index>(j)) = points.row(global[j]);
+      }
+      const Aabb box = Aabb::of(local);
+      const int32_t id = ids[static_cast<size_t>(order[begin])];
+      built[r].emplace(Object{id, std::move(global), KdIndex(local, "source"), box});
+    } catch (...) {
+      failed[r] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+  objects_.reserve(built.size());
+  for (std::optional<Object>& o : built) objects_.push_back(std::move(*o));
 }
 
 const ObjectIndex::Object* ObjectIndex::find(int32_t id) const {

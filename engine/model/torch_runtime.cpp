@@ -4,10 +4,10 @@
 
 #include <ATen/Context.h>
 #include <ATen/Parallel.h>
-#include <malloc.h>
 #include <torch/cuda.h>
 #include <torch/version.h>
 
+#include "engine/core/allocator.h"
 #include "engine/core/system_info.h"
 #include "engine/core/threads.h"
 #include "engine/model/conv_implementation.h"
@@ -18,12 +18,9 @@ namespace {
 // LibTorch's CPU tensors come from malloc, and a model step frees and reallocates the same few
 // megabytes every time. With glibc's defaults the freed top of the heap goes back to the kernel
 // and the next step faults it in again, zeroed: 11 % of a training step's profile was page
-// faults. Keep up to 128 MiB of freed memory for reuse, grow the heap 16 MiB at a time, and map
-// only blocks above 32 MiB on their own (so huge tensors still return to the system).
+// faults. configure_allocator() keeps freed memory for reuse.
 const bool kAllocatorConfigured = [] {
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 128 << 20);
-  mallopt(M_TOP_PAD, 16 << 20);
+  configure_allocator();
   return true;
 }();
 

@@ -20,6 +20,7 @@
 #include <string>
 #include <tuple>
 
+#include "engine/core/allocator.h"
 #include "engine/core/rng.h"
 #include "engine/core/system_info.h"
 #include "engine/core/threads.h"
@@ -356,6 +357,10 @@ BENCHMARK(BM_BaselineMapGridDownsamplePerObject)->Apply(serial_args);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
+  // The heap settings of the programs that build these lists (they run LibTorch, which sets
+  // them): with glibc's defaults every freshly built tree is faulted in anew, 40 ms of a 100k
+  // point knn_all on one thread.
+  dynscope::configure_allocator();
   // Torch-free, so the machine context without the LibTorch lines of bench_context.cpp.
   for (const auto& [key, value] : dynscope::system_context()) {
     benchmark::AddCustomContext(key, value);

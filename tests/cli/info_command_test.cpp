@@ -72,8 +72,8 @@ TEST(InfoCommand, SystemNamesTheMappedBlasThreadsLibTorchAndGl) {
   const auto r = run_dynscope("info --system --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
-  for (const char* key : {"cores", "compute_threads", "openmp_threads", "blas", "libtorch", "cuda",
-                          "torch_intraop_threads", "gl_headless"}) {
+  for (const char* key : {"cores", "compute_threads", "openmp_threads", "allocator", "blas",
+                          "libtorch", "cuda", "torch_intraop_threads", "gl_headless"}) {
     EXPECT_TRUE(j.contains(key)) << key << " missing in " << r.output;
   }
   const std::string blas = j["blas"];
@@ -83,6 +83,8 @@ TEST(InfoCommand, SystemNamesTheMappedBlasThreadsLibTorchAndGl) {
     EXPECT_EQ(std::filesystem::canonical(blas), linked);
   EXPECT_EQ(j.contains("warning"), blas.find("/blas/libblas.so") != std::string::npos);
   EXPECT_EQ(j["compute_threads"], "1") << "the default budget is one thread";
+  EXPECT_EQ(j["allocator"].get<std::string>().rfind("dynscope", 0), 0u)
+      << "a process that runs the model keeps freed memory: " << j["allocator"];
   const auto none = run_dynscope("info");
   EXPECT_NE(none.exit_code, 0);
   EXPECT_NE(none.output.find("--system"), std::string::npos) << none.output;

@@ -408,5 +408,19 @@ TEST(NeighborsTest, BadInputsThrowNamedValueErrors) {
   }
 }
 
+TEST(NeighborsTest, AnObjectsTreeErrorReachesTheCallerFromTheParallelBuild) {
+  // Enough source points and objects for ObjectIndex to build its trees on two threads; a
+  // coordinate beyond 1e18 (finite, so it passes the input check) fails one object's tree.
+  Cloud c = make_cloud(43, {1200, 900, 800});
+  c.points(2000, 2) = 1e19;
+  const int saved = compute_threads();
+  for (const int threads : {1, 2}) {
+    set_compute_threads(threads);
+    expect_value_error([&] { ObjectIndex(c.points, c.ids); }, "source");
+    expect_value_error([&] { knn_same_object(c.points, c.ids, c.points, c.ids, 8); }, "source");
+  }
+  set_compute_threads(saved);
+}
+
 }  // namespace
 }  // namespace dynscope
