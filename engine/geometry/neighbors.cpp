@@ -17,8 +17,6 @@ namespace {
 
 // Below this many queries a parallel region costs more than it saves.
 constexpr Eigen::Index kMinParallelQueries = 256;
-// Below this many source points an ObjectIndex builds its objects' trees on one thread.
-constexpr Eigen::Index kMinParallelTreePoints = 2048;
 // Queries per scheduling chunk: large enough to amortise scheduling, small enough that a thread
 // slowed down by a busy core does not hold the others up.
 constexpr int kQueryChunk = 64;
@@ -88,8 +86,8 @@ void for_each_query(Eigen::Index rows, const Answer& answer) {
 }
 
 // Calls task(i, scratch) for i in 0 .. tasks - 1 (groups of queries answered together by
-// KdIndex::knn_self), in parallel on the compute threads when there are `rows` >=
-// kMinParallelQueries queries in all. Each group writes only its own rows.
+// KdIndex::knn_self, or an ObjectIndex's trees), in parallel on the compute threads when there are
+// `rows` >= kMinParallelQueries queries in all. Each group writes only its own rows.
 template <typename Task>
 void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
   const int threads = rows >= kMinParallelQueries ? compute_threads() : 1;
@@ -235,15 +233,12 @@ ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
     ranges.emplace_back(begin, end);
     begin = end;
   }
-  // The objects' trees are independent: built in parallel on the compute threads when there are
-  // enough points for it to pay, each into its own slot, so the result does not depend on the
-  // thread count. A tree's error (a coordinate beyond 1e18) is rethrown here, not inside the
-  // parallel region.
+  // The objects' trees are independent: built on the compute threads like the queries
+  // (for_each_group), each into its own slot, so the result does not depend on the thread count.
+  // A tree's error (a coordinate beyond 1e18) is rethrown here, not inside the parallel region.
   std::vector<std::optional<Object>> built(ranges.size());
   std::vector<std::exception_ptr> failed(ranges.size());
-  const int threads = ranges.size() > 1 && size_ >= kMinParallelTreePoints ? compute_threads() : 1;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (threads > 1)
-  for (size_t r = 0; r < ranges.size(); ++r) {
+  for_each_group(ranges.size(), size_, [&](size_t r, std::vector<Neighbor>&) {
     try {
       const auto [begin, end] = ranges[r];
       std::vector<int32_t> global(order.begin() + static_cast<std::ptrdiff_t>(begin),
@@ -258,7 +253,7 @@ ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
     } catch (...) {
       failed[r] = std::current_exception();
     }
-  }
+  });
   for (const std::exception_ptr& e : failed) {
     if (e) std::rethrow_exception(e);
   }
