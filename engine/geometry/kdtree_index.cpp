@@ -8,6 +8,7 @@
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/geometry/small_set_knn.h"
 
 namespace dynscope {
 namespace {
@@ -17,8 +18,8 @@ constexpr double kMaxCoordinate = 1e18;
 // The tree's pruning bounds are sums of a few rounded squares updated once per tree level, so
 // they are off by at most ~1e-14 relative; widening the bound by 1e-9 can only visit more cells.
 constexpr double kBoundSlack = 1e-9;
-// Points per leaf (and the size below which a scan answers): of 6, 12 and 24, 24 was fastest for
-// K = 16 on object surfaces in geometry_bench.
+// Points per leaf: of 6, 12 and 24, 24 was fastest for K = 16 on object surfaces in
+// geometry_bench. Sets of up to kSmallSetSize points have no tree (small_set_knn answers them).
 constexpr size_t kLeafSize = 24;
 // knn_self keeps a leaf's candidates in a 32-bit mask.
 static_assert(kLeafSize <= 32);
@@ -69,7 +70,8 @@ double widen(double sq_dist) {
 }
 
 // Every point within `max_sq_dist` of `query`, the min(k, count) nearest kept, sorted: the
-// answer when the tree cannot help (tiny sets, queries whose squared distances could overflow).
+// answer when neither the tree nor small_set_knn can (queries whose squared distances could
+// overflow, radius queries of sets without a tree).
 void scan(const Points& points, const Vec3& query, size_t k, double max_sq_dist,
           std::vector<Neighbor>& out) {
   out.clear();
@@ -260,7 +262,7 @@ KdIndex::KdIndex(const Points& points, const char* what) : points_(points) {
       throw ValueError(what, "point " + std::to_string(i) + " is not finite or exceeds 1e18");
     }
   }
-  if (points_.rows() > static_cast<Eigen::Index>(kLeafSize)) {
+  if (points_.rows() > static_cast<Eigen::Index>(kSmallSetSize)) {
     tree_ = std::make_unique<Tree>(points_);
   }
 }
@@ -274,11 +276,16 @@ void KdIndex::knn(const Vec3& query, int k, std::vector<Neighbor>& out, double m
   if (!query.allFinite()) throw ValueError("query", "point is not finite");
   if (points_.rows() == 0 || k <= 0 || !(max_sq_dist >= 0.0)) return;
   const auto wanted = std::min(static_cast<size_t>(k), static_cast<size_t>(points_.rows()));
-  if (!tree_ || query.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+  if (query.cwiseAbs().maxCoeff() > kMaxCoordinate) {
     scan(points_, query, wanted, max_sq_dist, out);
     return;
   }
   out.resize(wanted);
+  if (!tree_) {
+    out.resize(small_set_knn(points_.data(), static_cast<size_t>(points_.rows()), query, wanted,
+                             max_sq_dist, out.data()));
+    return;
+  }
   KnnResult result(tree_->original.data(), out.data(), wanted, max_sq_dist);
   tree_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
   out.resize(result.size());

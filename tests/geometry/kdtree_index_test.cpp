@@ -177,6 +177,42 @@ TEST(KdIndexTest, KnnWithinALimitKeepsOnlyPointsAtOrBelowIt) {
   EXPECT_TRUE(found.empty());
 }
 
+TEST(KdIndexTest, KnnWithinALimitOnSurfacesEqualsBruteForce) {
+  // The limited search walks the cells' boxes: queries on, inside, beside and far from a sphere's
+  // surface, with limits from none of the points to all of them.
+  Rng rng(33);
+  for (const Vec3& centre : {Vec3(0.3, -0.2, 0.1), Vec3(2e5, 1e5, -3e5)}) {
+    Points sphere(3000, 3);
+    for (Eigen::Index i = 0; i < sphere.rows(); ++i) {
+      const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+      sphere.row(i) = (0.1 * v.normalized() + centre).transpose();
+    }
+    const KdIndex index(sphere);
+    std::vector<Neighbor> found;
+    for (int t = 0; t < 60; ++t) {
+      const Vec3 v = Vec3(rng.normal(), rng.normal(), rng.normal()).normalized();
+      const double r = t % 4 == 0 ? 0.0 : rng.uniform(0.02, 0.25);
+      const Vec3 q = t % 5 == 0 ? Vec3(sphere.row(t).transpose()) : Vec3(centre + r * v);
+      const std::vector<Neighbor> all = brute_force(sphere, q);
+      for (const double limit : {0.0, 1e-4, 0.0025, 0.01, 0.04, 1.0}) {
+        for (const int k : {1, 8, 16}) {
+          std::vector<Neighbor> expected;
+          for (const Neighbor& n : all) {
+            if (n.sq_dist <= limit && expected.size() < static_cast<size_t>(k)) {
+              expected.push_back(n);
+            }
+          }
+          index.knn(q, k, found, limit);
+          SCOPED_TRACE("query " + std::to_string(t) + " limit " + std::to_string(limit) + " k " +
+                       std::to_string(k));
+          expect_same(found, expected);
+          if (HasFatalFailure()) return;
+        }
+      }
+    }
+  }
+}
+
 TEST(KdIndexTest, TinySetsAndFarQueriesEqualBruteForce) {
   Rng rng(8);
   for (const Eigen::Index n : {1, 2, 11, 12, 13, 40}) {
@@ -191,6 +227,51 @@ TEST(KdIndexTest, TinySetsAndFarQueriesEqualBruteForce) {
       index.knn(q, 16, found);
       expect_same(found,
                   std::vector<Neighbor>(all.begin(), all.begin() + std::min<Eigen::Index>(16, n)));
+    }
+  }
+}
+
+TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
+  // Sets answered by ranking every distance and sets with a tree, on both sides of the size where
+  // one takes over from the other: lattice points (ties and duplicates at every place) and
+  // surface points, near and far from the origin, with and without a distance limit, k from one
+  // to past the set's size.
+  Rng rng(31);
+  for (const Eigen::Index n : {1, 2, 7, 24, 25, 31, 32, 33, 47, 48, 49, 63, 64, 65, 97}) {
+    for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
+      Points surface(n, 3);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+        surface.row(i) = (0.3 * v.normalized() + offset).transpose();
+      }
+      for (const Points& points : {lattice_cloud(40 + static_cast<uint64_t>(n), n, offset), surface}) {
+        const KdIndex index(points);
+        std::vector<Neighbor> found;
+        for (int t = 0; t < 12; ++t) {
+          Vec3 q(static_cast<double>(rng.uniform_int(0, 5)),
+                 static_cast<double>(rng.uniform_int(0, 5)),
+                 static_cast<double>(rng.uniform_int(0, 3)));
+          if (t % 3 == 1) q += Vec3(0.5, 0.5, 0.5);
+          if (t % 3 == 2) q = points.row(t % n).transpose();  // on a point of the set
+          else q += offset;
+          const std::vector<Neighbor> all = brute_force(points, q);
+          for (const int k : {1, 5, 16, 47, 100}) {
+            for (const double limit : {std::numeric_limits<double>::infinity(), 2.0, 0.0}) {
+              std::vector<Neighbor> expected;
+              for (const Neighbor& nb : all) {
+                if (nb.sq_dist <= limit && expected.size() < static_cast<size_t>(k)) {
+                  expected.push_back(nb);
+                }
+              }
+              index.knn(q, k, found, limit);
+              SCOPED_TRACE("n " + std::to_string(n) + " k " + std::to_string(k) + " limit " +
+                           std::to_string(limit) + " query " + std::to_string(t));
+              expect_same(found, expected);
+              if (HasFatalFailure()) return;
+            }
+          }
+        }
+      }
     }
   }
 }

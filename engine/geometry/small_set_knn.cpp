@@ -1,0 +1,37 @@
+// small_set_knn: rank every distance of a small set. Compiled with -O3 (the ranking loops
+// vectorise) and -ffp-contract=off (distances round as squared_distance()); see CMakeLists.txt.
+#include "engine/geometry/small_set_knn.h"
+
+#include <algorithm>
+#include <array>
+
+namespace dynscope {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#endif
+size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
+                     Neighbor* out) {
+  n = std::min(n, kSmallSetSize);
+  std::array<double, kSmallSetSize> d;
+  const double qx = query.x(), qy = query.y(), qz = query.z();
+  for (size_t j = 0; j < n; ++j) {
+    const double dx = qx - xyz[3 * j], dy = qy - xyz[3 * j + 1], dz = qz - xyz[3 * j + 2];
+    d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+  }
+  // Point i's place among the points within the limit: those before it in (distance, index)
+  // order. A point beyond the limit is farther than every point within it, so it never counts.
+  size_t count = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double di = d[i];
+    if (!(di <= max_sq_dist)) continue;
+    ++count;
+    size_t place = 0;
+    for (size_t j = 0; j < i; ++j) place += d[j] <= di ? 1 : 0;
+    for (size_t j = i + 1; j < n; ++j) place += d[j] < di ? 1 : 0;
+    if (place < k) out[place] = {di, static_cast<int32_t>(i)};
+  }
+  return std::min(count, k);
+}
+
+}  // namespace dynscope

@@ -1,0 +1,24 @@
+// The k nearest of a small point set by ranking every distance (internal to KdIndex).
+#pragma once
+
+#include <cstddef>
+
+#include "engine/geometry/kdtree_index.h"
+
+namespace dynscope {
+
+/// Largest set small_set_knn() answers, and the size up to which KdIndex builds no tree: up to
+/// here computing and ranking every distance is faster than descending a tree (K = 16 on object
+/// surfaces, 3,000 queries: 4× at 20 points, 2× at 26, 1.1–1.7× at 48, geometry_bench).
+constexpr size_t kSmallSetSize = 48;
+
+/// Writes to `out` the min(k, count) points of `xyz` (`n` <= kSmallSetSize points, row-major
+/// x, y, z) nearest to `query` among the `count` whose squared distance is <= `max_sq_dist`,
+/// sorted by (squared_distance(query, point), index), and returns how many it wrote. Equal to a
+/// brute-force sort: every distance rounds as squared_distance() (no contraction into FMA), and a
+/// point's place is the number of points ordering before it. Branch-free and vectorised (cloned
+/// for x86-64-v4, v3 and the baseline).
+size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
+                     Neighbor* out);
+
+}  // namespace dynscope
