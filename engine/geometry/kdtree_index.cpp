@@ -23,6 +23,8 @@ constexpr double kBoundSlack = 1e-9;
 constexpr size_t kLeafSize = 24;
 // knn_self keeps a leaf's candidates in a 32-bit mask.
 static_assert(kLeafSize <= 32);
+// knn_self ranks a first leaf with rank_nearest.
+static_assert(kLeafSize <= kSmallSetSize);
 
 // True when (sq_dist, index) orders before `b`: nearer, or as near with a lower index.
 bool neighbor_before(double sq_dist, int32_t index, const Neighbor& b) {
@@ -342,6 +344,12 @@ void KdIndex::knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
         const double* p = &t.xyz[3 * (leaf.begin + j)];
         const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
         d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+      }
+      if (c == 0) {
+        // The first leaf (the group's own): every candidate placed by counting, not inserted.
+        count[qi] = rank_nearest(d.data(), &t.original[leaf.begin], n, wanted,
+                                 std::numeric_limits<double>::infinity(), best);
+        continue;
       }
       // Candidates at or below the k-th distance as a bit mask, computed without branches; only
       // those are inserted, in index order within the leaf.

@@ -8,8 +8,13 @@
 namespace dynscope {
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#define DYNSCOPE_RANK_CLONES \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define DYNSCOPE_RANK_CLONES
 #endif
+
+DYNSCOPE_RANK_CLONES
 size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
                      Neighbor* out) {
   n = std::min(n, kSmallSetSize);
@@ -20,7 +25,8 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
     d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
   }
   // Point i's place among the points within the limit: those before it in (distance, index)
-  // order. A point beyond the limit is farther than every point within it, so it never counts.
+  // order, the indices being the positions. A point beyond the limit is farther than every point
+  // within it, so it never counts.
   size_t count = 0;
   for (size_t i = 0; i < n; ++i) {
     const double di = d[i];
@@ -30,6 +36,27 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
     for (size_t j = 0; j < i; ++j) place += d[j] <= di ? 1 : 0;
     for (size_t j = i + 1; j < n; ++j) place += d[j] < di ? 1 : 0;
     if (place < k) out[place] = {di, static_cast<int32_t>(i)};
+  }
+  return std::min(count, k);
+}
+
+DYNSCOPE_RANK_CLONES
+size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
+                    Neighbor* out) {
+  n = std::min(n, kSmallSetSize);
+  // As small_set_knn, ties broken by the given indices.
+  size_t count = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double di = d[i];
+    const int32_t ii = index[i];
+    if (!(di <= max_sq_dist)) continue;
+    ++count;
+    int32_t place = 0;
+    for (size_t j = 0; j < n; ++j) {
+      place += static_cast<int32_t>(d[j] < di) |
+               (static_cast<int32_t>(d[j] == di) & static_cast<int32_t>(index[j] < ii));
+    }
+    if (static_cast<size_t>(place) < k) out[place] = {di, ii};
   }
   return std::min(count, k);
 }

@@ -21,4 +21,11 @@ constexpr size_t kSmallSetSize = 48;
 size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
                      Neighbor* out);
 
+/// Writes to `out` the min(k, count) of `n` <= kSmallSetSize candidates (squared distance `d[j]`,
+/// index `index[j]`) among the `count` with d[j] <= `max_sq_dist`, sorted by (distance, index),
+/// and returns how many it wrote: the ranking small_set_knn() uses, for candidates whose distances
+/// are already computed (a kd-tree leaf's). Indices must be distinct.
+size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
+                    Neighbor* out);
+
 }  // namespace dynscope
