@@ -1,7 +1,10 @@
 // Tests of assets/recipes/run.sh, the script that starts or continues campaign recipes in
 // sittings: it must find each recipe's own checkpoint (the top-level "out", not a dataset's),
 // start a new run, resume one with a training state, leave a finished one alone and refuse a
-// recipe without a checkpoint path. `dynscope` is replaced by a script that records its arguments.
+// recipe without a checkpoint path. And of assets/recipes/physion-600/evaluate.sh, which
+// evaluates the Physion-like campaign's finished runs: held-out set generated when missing, only
+// finished runs evaluated, on the right scenes, then compared over seeds. `dynscope` is replaced
+// by a script that records its arguments.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -19,6 +22,10 @@ namespace fs = std::filesystem;
 using test::run_shell;
 
 const std::string kScript = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/run.sh";
+const std::string kPhysionEvaluate =
+    std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/physion-600/evaluate.sh";
+const char* const kScenarios[] = {"drop", "collide", "roll", "dominoes", "support", "contain",
+                                  "link"};
 
 void write_file(const fs::path& path, const std::string& text) {
   std::ofstream out(path);
@@ -97,6 +104,86 @@ TEST_F(CampaignScript, RefusesARecipeWithoutACheckpointPath) {
   EXPECT_NE(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("no \"out\" checkpoint path"), std::string::npos) << result.output;
   EXPECT_EQ(calls(), "");
+}
+
+// A run's progress record, as training writes it into CKPT.recipe.json.
+void write_progress(const fs::path& checkpoint, int steps, int total) {
+  write_file(checkpoint.string() + ".recipe.json",
+             "{\n  \"progress\": {\n    \"steps\": " + std::to_string(steps) +
+                 ",\n    \"total_steps\": " + std::to_string(total) + "\n  }\n}\n");
+}
+
+class PhysionEvaluateScript : public CampaignScript {
+ protected:
+  test::CommandResult evaluate(const std::string& split) const {
+    return run_shell("DYNSCOPE=" + recorder_.string() + " DYNSCOPE_CAMPAIGN_RUNS=" +
+                     (dir_ / "runs").string() + " DYNSCOPE_CAMPAIGN_DATA=" +
+                     (dir_ / "data").string() + " DYNSCOPE_CAMPAIGN_OUT=" +
+                     (dir_ / "out").string() + " bash " + kPhysionEvaluate + " " + split);
+  }
+};
+
+TEST_F(PhysionEvaluateScript, GeneratesTheHeldOutSetAndEvaluatesOnlyFinishedRuns) {
+  fs::create_directories(dir_ / "runs");
+  write_progress(dir_ / "runs" / "centred_s1.pt", 10, 10);
+  write_progress(dir_ / "runs" / "centred_s2.pt", 10, 10);
+  write_progress(dir_ / "runs" / "paper_s3.pt", 5, 10);
+  const auto result = evaluate("test");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string data = (dir_ / "data" / "physion-test").string();
+  const std::string out = (dir_ / "out").string();
+  std::string expected;
+  for (const char* s : kScenarios) {
+    expected += "generate --scenario " + std::string(s) + " --count 24 --seed 3 --out " + data +
+                "/" + s + " --jobs 2\n";
+  }
+  std::string scenes;
+  for (const char* s : kScenarios) scenes += " --data " + data + "/" + s;
+  for (const char* name : {"centred_s1", "centred_s2"}) {
+    expected += "eval --checkpoint " + (dir_ / "runs").string() + "/" + name + ".best.pt" +
+                scenes + " --split all --threads 1 --json " + out + "/" + name + ".test.json\n";
+  }
+  expected += "compare centred=" + out + "/centred_s1.test.json," + out +
+              "/centred_s2.test.json --json " + out + "/compare.test.json\n";
+  EXPECT_EQ(calls(), expected);
+  EXPECT_NE(result.output.find("paper_s3: still training (5 of 10 steps), skipped"),
+            std::string::npos)
+      << result.output;
+}
+
+TEST_F(PhysionEvaluateScript, ValidationNeedsTheCampaignsDataAndUnknownSplitsAreRefused) {
+  const auto val = evaluate("val");
+  EXPECT_NE(val.exit_code, 0) << val.output;
+  EXPECT_NE(val.output.find("a campaign recipe's first run writes it"), std::string::npos)
+      << val.output;
+  const auto bad = evaluate("train");
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_NE(bad.output.find("usage:"), std::string::npos) << bad.output;
+  EXPECT_EQ(calls(), "") << "nothing is run";
+}
+
+TEST_F(PhysionEvaluateScript, EvaluatesTheValidationSplitOfTheCampaignsData) {
+  for (const char* s : kScenarios) {
+    fs::create_directories(dir_ / "data" / "physion-600" / s);
+    write_file(dir_ / "data" / "physion-600" / s / "manifest.json", "{}");
+  }
+  fs::create_directories(dir_ / "runs");
+  write_progress(dir_ / "runs" / "paper_s1.pt", 10, 10);
+  const auto result = evaluate("val");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string c = calls();
+  EXPECT_EQ(c.find("generate"), std::string::npos) << c;
+  EXPECT_NE(c.find("eval --checkpoint " + (dir_ / "runs").string() + "/paper_s1.best.pt --data " +
+                   (dir_ / "data" / "physion-600" / "drop").string()),
+            std::string::npos)
+      << c;
+  EXPECT_NE(c.find(" --split val --threads 1 --json " + (dir_ / "out").string() +
+                   "/paper_s1.val.json\n"),
+            std::string::npos)
+      << c;
+  EXPECT_NE(c.find("compare paper=" + (dir_ / "out").string() + "/paper_s1.val.json"),
+            std::string::npos)
+      << c;
 }
 
 }  // namespace

@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# Evaluates the finished runs of the Physion-like reproduction campaign and compares them over
+# seeds:
+#   assets/recipes/physion-600/evaluate.sh [test|val]      (default: test)
+# test: the held-out set, 24 scenes per scenario generated apart with a seed the campaign's data
+# never uses (`dynscope generate --scenario S --count 24 --seed 3`, into data/physion-test/S;
+# generated here when missing) and evaluated whole (`--split all`). val: the validation split of
+# the campaign's own data (data/physion-600, written by the recipes' first run), the split the
+# epochs were chosen on.
+# Each finished run's best-epoch checkpoint (chosen on the validation split during training) is
+# evaluated once into out/campaign-physion/NAME.SPLIT.json (again only when the checkpoint is
+# newer); runs still training are skipped. Then `dynscope compare` prints every variant's contact
+# accuracy per scenario and end error as mean ± sd over the seeds evaluated so far, beside the
+# constant-velocity floor and the contact rule on the truth, into
+# out/campaign-physion/compare.SPLIT.{txt,json}.
+# DYNSCOPE, DYNSCOPE_CAMPAIGN_RUNS, DYNSCOPE_CAMPAIGN_DATA and DYNSCOPE_CAMPAIGN_OUT replace the
+# program (build/bin/dynscope), the checkpoints' folder (assets/runs/physion-600), the data's
+# root (data) and the output folder (out/campaign-physion).
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+dynscope=${DYNSCOPE:-build/bin/dynscope}
+source assets/recipes/progress.sh
+split=${1:-test}
+data_root=${DYNSCOPE_CAMPAIGN_DATA:-data}
+scenarios=(drop collide roll dominoes support contain link)
+case "$split" in
+  test)
+    root=$data_root/physion-test
+    eval_split=all
+    for s in "${scenarios[@]}"; do
+      if [ ! -f "$root/$s/manifest.json" ]; then
+        echo "generating the held-out $s scenes into $root/$s"
+        "$dynscope" generate --scenario "$s" --count 24 --seed 3 --out "$root/$s" --jobs 2
+      fi
+    done
+    ;;
+  val)
+    root=$data_root/physion-600
+    eval_split=val
+    for s in "${scenarios[@]}"; do
+      if [ ! -f "$root/$s/manifest.json" ]; then
+        echo "$root/$s is missing: a campaign recipe's first run writes it" \
+          "(assets/recipes/run.sh assets/recipes/physion-600/centred_s1.json)" >&2
+        exit 1
+      fi
+    done
+    ;;
+  *)
+    echo "usage: $0 [test|val]" >&2
+    exit 2
+    ;;
+esac
+data=()
+for s in "${scenarios[@]}"; do data+=(--data "$root/$s"); done
+runs=${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}
+out=${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}
+mkdir -p "$out"
+# The shipped recipe's three seeds, the paper's architecture, and the static-bodies-held variant.
+variants=(centred paper held)
+groups=()
+for variant in "${variants[@]}"; do
+  files=()
+  for recipe in assets/recipes/physion-600/"${variant}"_s[0-9].json; do
+    [ -f "$recipe" ] || continue
+    name=$(basename "$recipe" .json)
+    ckpt=$runs/$name.pt
+    [ -f "$ckpt.recipe.json" ] || continue
+    if ! run_finished "$ckpt"; then
+      echo "$name: still training ($(run_progress "$ckpt" | sed 's/ / of /') steps), skipped"
+      continue
+    fi
+    best=$runs/$name.best.pt
+    json=$out/$name.$split.json
+    if [ ! -f "$json" ] || [ "$best" -nt "$json" ]; then
+      echo "$name: evaluating $best on the $split scenes"
+      "$dynscope" eval --checkpoint "$best" "${data[@]}" --split "$eval_split" --threads 1 \
+        --json "$json" > "$out/$name.$split.txt"
+    fi
+    files+=("$json")
+  done
+  if [ ${#files[@]} -gt 0 ]; then
+    groups+=("$variant=$(IFS=,; echo "${files[*]}")")
+  fi
+done
+if [ ${#groups[@]} -eq 0 ]; then
+  echo "no finished run to compare"
+  exit 0
+fi
+"$dynscope" compare "${groups[@]}" --json "$out/compare.$split.json" | tee "$out/compare.$split.txt"
