@@ -8,16 +8,17 @@
 namespace dynscope {
 
 /// Largest set small_set_knn() answers, and the size up to which KdIndex builds no tree: up to
-/// here computing and ranking every distance is faster than descending a tree (K = 16 on object
-/// surfaces, 3,000 queries: 4× at 20 points, 2× at 26, 1.1–1.7× at 48, geometry_bench).
+/// here computing and ranking every distance is faster than descending a tree (K = 16, points on
+/// spheres, 3,000 queries, one thread: 3–4× at 20 points, 1.6–2× at 26, 1.1–1.7× at 48, level or
+/// slower from 64; README, "Small sets ranked instead of searched").
 constexpr size_t kSmallSetSize = 48;
 
 /// Writes to `out` the min(k, count) points of `xyz` (`n` <= kSmallSetSize points, row-major
 /// x, y, z) nearest to `query` among the `count` whose squared distance is <= `max_sq_dist`,
 /// sorted by (squared_distance(query, point), index), and returns how many it wrote. Equal to a
 /// brute-force sort: every distance rounds as squared_distance() (no contraction into FMA), and a
-/// point's place is the number of points ordering before it. Branch-free and vectorised (cloned
-/// for x86-64-v4, v3 and the baseline).
+/// point's place is the number of points ordering before it, counted by branch-free loops that
+/// vectorise (cloned for x86-64-v4, v3 and the baseline).
 size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
                      Neighbor* out);
 
