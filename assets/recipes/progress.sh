@@ -1,5 +1,5 @@
 # Sourced by assets/recipes/run.sh and the campaigns' evaluate.sh: a run's progress as its
-# checkpoint's recipe records it.
+# checkpoint's recipe records it, and the campaigns' evaluation over seeds.
 # run_progress CKPT prints "DONE TOTAL" (steps done, steps planned), or nothing without a recipe.
 run_progress() {
   local recipe="$1.recipe.json"
@@ -14,4 +14,45 @@ run_finished() {
   local done_steps total_steps
   read -r done_steps total_steps <<< "$(run_progress "$1")"
   [ -n "$done_steps" ] && [ "$done_steps" = "$total_steps" ]
+}
+# evaluate_and_compare RECIPES RUNS OUT SPLIT "VARIANT ..." EVAL_ARG ...
+# The campaigns' evaluation: for each variant (in the order of its claims), every recipe
+# RECIPES/VARIANT_sN.json whose run RUNS/NAME.pt has finished has its best-epoch checkpoint
+# evaluated once into OUT/NAME.SPLIT.json (`$dynscope eval --checkpoint BEST EVAL_ARG ... --threads
+# 1`; again only when the checkpoint is newer); runs still training are reported and skipped.
+# Then `$dynscope compare` over the variants' seeds, into OUT/compare.SPLIT.{txt,json}.
+evaluate_and_compare() {
+  local recipes=$1 runs=$2 out=$3 split=$4 variants=$5
+  shift 5
+  local groups=() files variant recipe name ckpt best json
+  mkdir -p "$out"
+  for variant in $variants; do
+    files=()
+    for recipe in "$recipes/${variant}"_s[0-9].json; do
+      [ -f "$recipe" ] || continue
+      name=$(basename "$recipe" .json)
+      ckpt=$runs/$name.pt
+      [ -f "$ckpt.recipe.json" ] || continue
+      if ! run_finished "$ckpt"; then
+        echo "$name: still training ($(run_progress "$ckpt" | sed 's/ / of /') steps), skipped"
+        continue
+      fi
+      best=$runs/$name.best.pt
+      json=$out/$name.$split.json
+      if [ ! -f "$json" ] || [ "$best" -nt "$json" ]; then
+        echo "$name: evaluating $best on the $split split"
+        "$dynscope" eval --checkpoint "$best" "$@" --threads 1 --json "$json" \
+          > "$out/$name.$split.txt"
+      fi
+      files+=("$json")
+    done
+    if [ ${#files[@]} -gt 0 ]; then
+      groups+=("$variant=$(IFS=,; echo "${files[*]}")")
+    fi
+  done
+  if [ ${#groups[@]} -eq 0 ]; then
+    echo "no finished run to compare"
+    return 0
+  fi
+  "$dynscope" compare "${groups[@]}" --json "$out/compare.$split.json" | tee "$out/compare.$split.txt"
 }

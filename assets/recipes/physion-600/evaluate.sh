@@ -52,38 +52,7 @@ case "$split" in
 esac
 data=()
 for s in "${scenarios[@]}"; do data+=(--data "$root/$s"); done
-runs=${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}
-out=${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}
-mkdir -p "$out"
 # The shipped recipe's three seeds, the paper's architecture, and the static-bodies-held variant.
-variants=(centred paper held)
-groups=()
-for variant in "${variants[@]}"; do
-  files=()
-  for recipe in assets/recipes/physion-600/"${variant}"_s[0-9].json; do
-    [ -f "$recipe" ] || continue
-    name=$(basename "$recipe" .json)
-    ckpt=$runs/$name.pt
-    [ -f "$ckpt.recipe.json" ] || continue
-    if ! run_finished "$ckpt"; then
-      echo "$name: still training ($(run_progress "$ckpt" | sed 's/ / of /') steps), skipped"
-      continue
-    fi
-    best=$runs/$name.best.pt
-    json=$out/$name.$split.json
-    if [ ! -f "$json" ] || [ "$best" -nt "$json" ]; then
-      echo "$name: evaluating $best on the $split scenes"
-      "$dynscope" eval --checkpoint "$best" "${data[@]}" --split "$eval_split" --threads 1 \
-        --json "$json" > "$out/$name.$split.txt"
-    fi
-    files+=("$json")
-  done
-  if [ ${#files[@]} -gt 0 ]; then
-    groups+=("$variant=$(IFS=,; echo "${files[*]}")")
-  fi
-done
-if [ ${#groups[@]} -eq 0 ]; then
-  echo "no finished run to compare"
-  exit 0
-fi
-"$dynscope" compare "${groups[@]}" --json "$out/compare.$split.json" | tee "$out/compare.$split.txt"
+evaluate_and_compare assets/recipes/physion-600 "${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}" \
+  "${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}" "$split" "centred paper held" \
+  "${data[@]}" --split "$eval_split"
