@@ -25,6 +25,15 @@ std::vector<Neighbor> brute_force(const Points& points, const Vec3& q) {
   return all;
 }
 
+// The first k of a brute-force answer whose squared distance is at most `limit`.
+std::vector<Neighbor> nearest_within(const std::vector<Neighbor>& all, size_t k, double limit) {
+  std::vector<Neighbor> out;
+  for (const Neighbor& n : all) {
+    if (n.sq_dist <= limit && out.size() < k) out.push_back(n);
+  }
+  return out;
+}
+
 void expect_same(const std::vector<Neighbor>& actual, const std::vector<Neighbor>& expected) {
   ASSERT_EQ(actual.size(), expected.size());
   for (size_t i = 0; i < actual.size(); ++i) {
@@ -166,20 +175,16 @@ TEST(KdIndexTest, KnnWithinALimitKeepsOnlyPointsAtOrBelowIt) {
   std::vector<Neighbor> found;
   for (const double limit : {0.0, 1.0, 2.0, 3.0, 100.0}) {
     const Vec3 q(2, 3, 1);
-    std::vector<Neighbor> expected;
-    for (const Neighbor& n : brute_force(points, q)) {
-      if (n.sq_dist <= limit && expected.size() < 16) expected.push_back(n);
-    }
     index.knn(q, 16, found, limit);
-    expect_same(found, expected);
+    expect_same(found, nearest_within(brute_force(points, q), 16, limit));
   }
   index.knn(Vec3(2, 3, 1), 16, found, -1.0);
   EXPECT_TRUE(found.empty());
 }
 
 TEST(KdIndexTest, KnnWithinALimitOnSurfacesEqualsBruteForce) {
-  // The limited search walks the cells' boxes: queries on, inside, beside and far from a sphere's
-  // surface, with limits from none of the points to all of them.
+  // Limited searches on a tree: queries on, inside, beside and far from a sphere's surface, with
+  // limits from none of the points to all of them.
   Rng rng(33);
   for (const Vec3& centre : {Vec3(0.3, -0.2, 0.1), Vec3(2e5, 1e5, -3e5)}) {
     Points sphere(3000, 3);
@@ -196,16 +201,10 @@ TEST(KdIndexTest, KnnWithinALimitOnSurfacesEqualsBruteForce) {
       const std::vector<Neighbor> all = brute_force(sphere, q);
       for (const double limit : {0.0, 1e-4, 0.0025, 0.01, 0.04, 1.0}) {
         for (const int k : {1, 8, 16}) {
-          std::vector<Neighbor> expected;
-          for (const Neighbor& n : all) {
-            if (n.sq_dist <= limit && expected.size() < static_cast<size_t>(k)) {
-              expected.push_back(n);
-            }
-          }
           index.knn(q, k, found, limit);
           SCOPED_TRACE("query " + std::to_string(t) + " limit " + std::to_string(limit) + " k " +
                        std::to_string(k));
-          expect_same(found, expected);
+          expect_same(found, nearest_within(all, static_cast<size_t>(k), limit));
           if (HasFatalFailure()) return;
         }
       }
@@ -257,16 +256,10 @@ TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
           const std::vector<Neighbor> all = brute_force(points, q);
           for (const int k : {1, 5, 16, 47, 100}) {
             for (const double limit : {std::numeric_limits<double>::infinity(), 2.0, 0.0}) {
-              std::vector<Neighbor> expected;
-              for (const Neighbor& nb : all) {
-                if (nb.sq_dist <= limit && expected.size() < static_cast<size_t>(k)) {
-                  expected.push_back(nb);
-                }
-              }
               index.knn(q, k, found, limit);
               SCOPED_TRACE("n " + std::to_string(n) + " k " + std::to_string(k) + " limit " +
                            std::to_string(limit) + " query " + std::to_string(t));
-              expect_same(found, expected);
+              expect_same(found, nearest_within(all, static_cast<size_t>(k), limit));
               if (HasFatalFailure()) return;
             }
           }
