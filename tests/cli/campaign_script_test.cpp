@@ -151,7 +151,7 @@ TEST_F(PhysionEvaluateScript, GeneratesTheHeldOutSetAndEvaluatesOnlyFinishedRuns
       << result.output;
 }
 
-TEST_F(PhysionEvaluateScript, ValidationNeedsTheCampaignsDataAndUnknownSplitsAreRefused) {
+TEST_F(PhysionEvaluateScript, ValidationNeedsTheCampaignsDataUnknownSplitsAreRefusedHelpExplains) {
   const auto val = evaluate("val");
   EXPECT_NE(val.exit_code, 0) << val.output;
   EXPECT_NE(val.output.find("a campaign recipe's first run writes it"), std::string::npos)
@@ -159,6 +159,10 @@ TEST_F(PhysionEvaluateScript, ValidationNeedsTheCampaignsDataAndUnknownSplitsAre
   const auto bad = evaluate("train");
   EXPECT_NE(bad.exit_code, 0) << bad.output;
   EXPECT_NE(bad.output.find("usage:"), std::string::npos) << bad.output;
+  const auto help = evaluate("--help");
+  EXPECT_EQ(help.exit_code, 0) << help.output;
+  EXPECT_NE(help.output.find("the held-out set, 24 scenes per scenario"), std::string::npos)
+      << help.output;
   EXPECT_EQ(calls(), "") << "nothing is run";
 }
 

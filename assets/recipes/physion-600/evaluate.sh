@@ -45,8 +45,12 @@ case "$split" in
       fi
     done
     ;;
+  -h | --help)
+    sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+    exit 0
+    ;;
   *)
-    echo "usage: $0 [test|val]" >&2
+    echo "usage: $0 [test|val]  (--help explains)" >&2
     exit 2
     ;;
 esac
