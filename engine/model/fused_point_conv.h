@@ -37,6 +37,17 @@ torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torc
                                        const EdgeMlps& mlps, const torch::Tensor& gate,
                                        const torch::Tensor& index);
 
+/// point_conv_aggregate_mlp(features, rel, mlps, gate, index) · weightᵀ: the aggregation and the
+/// linear after it (`weight` `[C_out, J·C']` float32, no bias), `[M, C_out]`. Without gradients
+/// to record (no grad mode, or no input requiring one) each query's aggregate row is multiplied
+/// inside the op, so the `[M, J·C']` aggregate is never written; otherwise it is the two ops, and
+/// differentiable as they are. Throws ValueError as point_conv_aggregate_mlp and on a weight of
+/// another shape.
+torch::Tensor point_conv_aggregate_mlp_linear(const torch::Tensor& features,
+                                              const torch::Tensor& rel, const EdgeMlps& mlps,
+                                              const torch::Tensor& gate, const torch::Tensor& index,
+                                              const torch::Tensor& weight);
+
 /// Gathered edge inputs for message passing, as one op: out[m,k] = q[m] + s[index[m,k]] + r[m,k]
 /// for valid entries and 0 where index is −1. `q` `[M,H]`, `s` `[N,H]`, `r` `[M,K,H]` (undefined:
 /// none). Float32 or float64, CPU; differentiable in q, s and r. Throws ValueError on mismatch.

@@ -73,30 +73,32 @@ torch::Tensor PointConvImpl::forward(const torch::Tensor& query, const torch::Te
   if (conv_implementation() == ConvImplementation::kUnfused) {
     return forward_unfused(query, source, features, neighbors);
   }
-  torch::Tensor agg;
+  torch::Tensor product;  // W·agg, [M,C_out]
   if (features.scalar_type() == torch::kFloat &&
       conv_implementation() != ConvImplementation::kFusedComposed) {
     // The WeightNet and the embedding run per neighbour inside the aggregation (and again in its
-    // backward): no [M,K,·] intermediate is written or saved. Their first layers take the
-    // position scale (W·(r/s) = (W/s)·r), so the list's shared relative positions are read as
-    // they are, not rescaled per convolution.
+    // backward): no [M,K,·] intermediate is written or saved; without gradients to record, the
+    // linear runs inside it too. The MLPs' first layers take the position scale
+    // (W·(r/s) = (W/s)·r), so the list's shared relative positions are read as they are, not
+    // rescaled per convolution.
     const torch::Tensor rel = neighbors.relative(query, source, 1.0);
     if (rel.scalar_type() == torch::kFloat) {
-      agg = point_conv_aggregate_mlp(features, rel, edge_mlps(1.0 / options_.position_scale()),
-                                     neighbors.gate, masked_index(neighbors));
+      product =
+          point_conv_aggregate_mlp_linear(features, rel, edge_mlps(1.0 / options_.position_scale()),
+                                          neighbors.gate, masked_index(neighbors), linear->weight);
     }
   }
-  if (!agg.defined()) {
-    agg = aggregate_with_autograd(
-        features, neighbors.relative(query, source, options_.position_scale()), neighbors);
+  if (!product.defined()) {
+    product = torch::mm(
+        aggregate_with_autograd(
+            features, neighbors.relative(query, source, options_.position_scale()), neighbors),
+        linear->weight.t());
   }
-  // Without neighbours there is nothing to convolve: the bias must not leak into the output.
-  if (!options_.normalize()) return linear->forward(agg) * neighbors.has_neighbors();
-  // The mean over the neighbours, (W·agg/n + b)·has = (W·agg)·(has/n) + has·b: the scale goes
-  // on the [M,C_out] product instead of the [M,J·C'] aggregate.
-  return torch::mm(agg, linear->weight.t())
-      .mul_(neighbors.inverse_count())
-      .addcmul_(neighbors.has_neighbors(), linear->bias);
+  // Without neighbours there is nothing to convolve: the bias must not leak into the output,
+  // (W·agg + b)·has. The mean over the neighbours, (W·agg/n + b)·has = (W·agg)·(has/n) + has·b:
+  // the scale goes on the [M,C_out] product instead of the [M,J·C'] aggregate.
+  if (!options_.normalize()) return product.add_(linear->bias).mul_(neighbors.has_neighbors());
+  return product.mul_(neighbors.inverse_count()).addcmul_(neighbors.has_neighbors(), linear->bias);
 }
 
 EdgeMlps PointConvImpl::edge_mlps(double position_factor) const {

@@ -3,6 +3,7 @@
 #include <ATen/Parallel.h>
 #include <torch/autograd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -24,6 +25,10 @@ struct InferenceArgs {
   int64_t k, c, p, hidden, pos_hidden;
   const float *w1, *b1, *w2t, *b2, *w3t, *b3;  // w1 [H,3]; w2t [H,H] (in, out); w3t [H,J]
   const float *e1, *c1, *e2t, *c2;             // e1 [P,3]; e2t [P,P] (in, out); null: none
+  // The linear applied to each query's aggregate row (`[n_out][J·C']`); null: none, the rows
+  // themselves are the output.
+  const float* linear = nullptr;
+  int64_t n_out = 0;
 };
 
 // The MLP sizes: filter width J, WeightNet hidden width H, embedding width P and its hidden width
@@ -76,13 +81,123 @@ DYNSCOPE_KERNEL_BODY void first_layer(float* __restrict y, const float* __restri
   }
 }
 
+// Vectors of 16 and 8 floats: one AVX-512 or AVX register in the v4 clone, two or more in the
+// others (GCC vector extensions, so every clone compiles the same source).
+typedef float Lanes16 __attribute__((vector_size(64)));
+typedef float Lanes8 __attribute__((vector_size(32)));
+
+// Vectors travel by reference: passed or returned by value they would change the ABI between the
+// clones.
+template <class V>
+DYNSCOPE_KERNEL_BODY void load_lanes(V& v, const float* p) {
+  std::memcpy(&v, p, sizeof v);
+}
+
+template <class V>
+DYNSCOPE_KERNEL_BODY void store_lanes(float* p, const V& v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+template <class V>
+DYNSCOPE_KERNEL_BODY void relu_lanes(V& v) {
+  v = v > 0.0f ? v : V{};
+}
+
+// The sum of a vector's lanes, by halves.
+DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes16& v) {
+  typedef float Lanes4 __attribute__((vector_size(16)));
+  Lanes8 lo, hi;
+  std::memcpy(&lo, &v, sizeof lo);
+  std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof lo, sizeof hi);
+  const Lanes8 s8 = lo + hi;
+  Lanes4 a, b;
+  std::memcpy(&a, &s8, sizeof a);
+  std::memcpy(&b, reinterpret_cast<const char*>(&s8) + sizeof a, sizeof b);
+  const Lanes4 s4 = a + b;
+  return (s4[0] + s4[1]) + (s4[2] + s4[3]);
+}
+
+// y[o] = Σ_i w[o·n + i] · x[i] for o < n_out (a linear's weight `[n_out][n]` as LibTorch stores
+// it): four outputs at a time, each a vector of partial sums over 16 inputs at a time, summed
+// across its lanes at the end.
+DYNSCOPE_KERNEL_BODY void apply_linear(float* __restrict y, const float* __restrict x, int64_t n,
+                                       const float* __restrict w, int64_t n_out) {
+  const int64_t n16 = n / 16 * 16;
+  int64_t o = 0;
+  for (; o + 4 <= n_out; o += 4) {
+    Lanes16 s[4] = {};
+    for (int64_t i = 0; i < n16; i += 16) {
+      Lanes16 xv;
+      load_lanes(xv, x + i);
+#pragma GCC unroll 4
+      for (int u = 0; u < 4; ++u) {
+        Lanes16 wv;
+        load_lanes(wv, w + (o + u) * n + i);
+        s[u] += xv * wv;
+      }
+    }
+    for (int u = 0; u < 4; ++u) {
+      float sum = lane_sum(s[u]);
+      for (int64_t i = n16; i < n; ++i) sum += w[(o + u) * n + i] * x[i];
+      y[o + u] = sum;
+    }
+  }
+  for (; o < n_out; ++o) {
+    Lanes16 s = {};
+    for (int64_t i = 0; i < n16; i += 16) {
+      Lanes16 xv, wv;
+      load_lanes(xv, x + i);
+      load_lanes(wv, w + o * n + i);
+      s += xv * wv;
+    }
+    float sum = lane_sum(s);
+    for (int64_t i = n16; i < n; ++i) sum += w[o * n + i] * x[i];
+    y[o] = sum;
+  }
+}
+
+// apply_linear for four queries at once: x holds their rows (`[4][n]`), y gets `[4][n_out]`. Each
+// weight vector loaded serves the four rows, so the products run at the vector units' rate rather
+// than the loads'.
+DYNSCOPE_KERNEL_BODY void apply_linear4(float* __restrict y, const float* __restrict x, int64_t n,
+                                        const float* __restrict w, int64_t n_out) {
+  const int64_t n16 = n / 16 * 16;
+  int64_t o = 0;
+  for (; o + 4 <= n_out; o += 4) {
+    Lanes16 s[4][4] = {};  // [query][output]
+    for (int64_t i = 0; i < n16; i += 16) {
+      Lanes16 xv[4];
+#pragma GCC unroll 4
+      for (int r = 0; r < 4; ++r) load_lanes(xv[r], x + r * n + i);
+#pragma GCC unroll 4
+      for (int u = 0; u < 4; ++u) {
+        Lanes16 wv;
+        load_lanes(wv, w + (o + u) * n + i);
+#pragma GCC unroll 4
+        for (int r = 0; r < 4; ++r) s[r][u] += xv[r] * wv;
+      }
+    }
+    for (int r = 0; r < 4; ++r) {
+      for (int u = 0; u < 4; ++u) {
+        float sum = lane_sum(s[r][u]);
+        for (int64_t i = n16; i < n; ++i) sum += w[(o + u) * n + i] * x[r * n + i];
+        y[r * n_out + o + u] = sum;
+      }
+    }
+  }
+  for (int r = 0; r < 4; ++r) {
+    if (o < n_out) apply_linear(y + r * n_out + o, x + r * n, n, w + o * n, n_out - o);
+  }
+}
+
 // Rows [begin, end) of the inference aggregation; `scratch` holds inference_scratch floats.
 template <class D>
 DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out, int64_t begin,
                                               int64_t end, D d, float* scratch) {
   const int64_t j = d.J(), c = a.c, p = d.P(), ct = c + p, k = a.k, hd = d.H(), ph = d.PH();
   const auto width = d.width();
-  float* acc = scratch;
+  float* row = scratch;  // the aggregate row when a linear follows
+  float* acc = row + ct * j;
   float* h1 = acc + ct * j;
   float* h2 = h1 + hd;
   float* hk = h2 + hd;
@@ -110,28 +225,184 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
         add_outer(acc + c * j, pe, p, hk, width);
       }
     }
-    float* o = out + q * j * ct;
+    float* o = a.linear ? row : out + q * j * ct;
     for (int64_t jj = 0; jj < j; ++jj) {
       for (int64_t cc = 0; cc < ct; ++cc) o[jj * ct + cc] = acc[cc * j + jj];
+    }
+    if (a.linear) apply_linear(out + q * a.n_out, row, j * ct, a.linear, a.n_out);
+  }
+}
+
+// The model's MLP sizes (J = 16, H = 8, an 8-wide embedding with hidden width 8 or none) have
+// inference_rows_blocked below; any other size runs inference_rows_body.
+template <class D>
+constexpr bool kBlockedDims = D{}.J() == 16 && D{}.H() == 8 &&
+                              ((D{}.P() == 8 && D{}.PH() == 8) || D{}.P() == 0);
+
+// The gathered rows' stride in inference_rows_blocked: C' rounded up to a multiple of 8.
+constexpr int64_t blocked_row_stride(int64_t ct) { return (ct + 7) / 8 * 8; }
+
+// The WeightNet's and the embedding's weights as whole vectors over their outputs.
+struct BlockedWeights {
+  Lanes8 w1[3], b1, w2[8], b2;  // w1[d] = column d of W1; w2[i] = row i of W2ᵀ
+  Lanes16 w3[8], b3;            // w3[i] = row i of W3ᵀ
+  Lanes8 e1[3], c1, e2[8], c2;  // the embedding's, likewise (unused without one)
+};
+
+DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool embedding) {
+  BlockedWeights w{};
+  for (int d = 0; d < 3; ++d) {
+    for (int o = 0; o < 8; ++o) w.w1[d][o] = a.w1[3 * o + d];
+  }
+  load_lanes(w.b1, a.b1);
+  for (int i = 0; i < 8; ++i) load_lanes(w.w2[i], a.w2t + 8 * i);
+  load_lanes(w.b2, a.b2);
+  for (int i = 0; i < 8; ++i) load_lanes(w.w3[i], a.w3t + 16 * i);
+  load_lanes(w.b3, a.b3);
+  if (embedding) {
+    for (int d = 0; d < 3; ++d) {
+      for (int o = 0; o < 8; ++o) w.e1[d][o] = a.e1[3 * o + d];
+    }
+    load_lanes(w.c1, a.c1);
+    for (int i = 0; i < 8; ++i) load_lanes(w.e2[i], a.e2t + 8 * i);
+    load_lanes(w.c2, a.c2);
+  }
+  return w;
+}
+
+// out[j·C' + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j < 16 and i < the lanes of V
+// (16 or 8): one block of channels of a query's aggregation over its nv gathered neighbour rows,
+// the 16 sums (one per filter row) kept in registers and each output written once.
+template <class V>
+DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t ct,
+                                          const float* __restrict x, int64_t stride, int64_t c0,
+                                          const float* __restrict h, int64_t nv) {
+  V acc[16] = {};
+  for (int64_t t = 0; t < nv; ++t) {
+    V xt;
+    load_lanes(xt, x + t * stride + c0);
+    const float* ht = h + t * 16;
+#pragma GCC unroll 16
+    for (int jj = 0; jj < 16; ++jj) acc[jj] += ht[jj] * xt;
+  }
+#pragma GCC unroll 16
+  for (int jj = 0; jj < 16; ++jj) store_lanes(out + jj * ct + c0, acc[jj]);
+}
+
+// Vector values of a small array in memory, read back one float at a time: the compiler must load
+// them from memory (a broadcast load per use) instead of extracting each lane from the register,
+// which costs a shuffle or two per lane.
+template <class V>
+DYNSCOPE_KERNEL_BODY void spill_lanes(float* to, const V& v) {
+  store_lanes(to, v);
+  asm("" : : "r"(to) : "memory");
+}
+
+// inference_rows_body for the model's MLP sizes, arranged for the vector units. Per query, each
+// valid neighbour's h (16 floats, gated) is computed as whole vectors, and its features and
+// embedding are gathered into one row of C' floats; then the aggregation runs over blocks of 16
+// (and 8) of the C' channels, each block's 16 filter rows summed in registers over the
+// neighbours. The previous arrangement added every neighbour's outer product into an accumulator
+// in memory (a load and a store per channel and neighbour) and transposed it into the output one
+// float at a time. `scratch` holds inference_scratch floats.
+template <class D>
+DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* out, int64_t begin,
+                                                 int64_t end, D d, float* scratch) {
+  constexpr bool kEmbedding = D{}.P() == 8;
+  const int64_t c = a.c, ct = c + d.P(), k = a.k, stride = blocked_row_stride(ct);
+  const BlockedWeights w = blocked_weights(a, kEmbedding);
+  float* hs = scratch;              // [K][16]: each valid neighbour's gated h
+  float* xs = hs + k * 16;          // [K][stride]: its features and embedding
+  float* hidden = xs + k * stride;  // [8]: a hidden layer's output, read one float at a time
+  float* row =
+      hidden + 8;  // [4][16·C']: the aggregate rows of up to 4 queries when a linear follows
+  for (int64_t q = begin; q < end; ++q) {
+    int64_t nv = 0;
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t e = q * k + n;
+      const int64_t src = a.index[e];
+      if (src < 0) continue;
+      const float* r = a.rel + e * 3;
+      Lanes8 h1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
+      relu_lanes(h1);
+      spill_lanes(hidden, h1);
+      Lanes8 h2 = w.b2;
+#pragma GCC unroll 8
+      for (int i = 0; i < 8; ++i) h2 += hidden[i] * w.w2[i];
+      relu_lanes(h2);
+      spill_lanes(hidden, h2);
+      Lanes16 h = w.b3;
+#pragma GCC unroll 8
+      for (int i = 0; i < 8; ++i) h += hidden[i] * w.w3[i];
+      if (a.gate) h *= a.gate[e];
+      store_lanes(hs + nv * 16, h);
+      float* x = xs + nv * stride;
+      std::copy(a.features + src * c, a.features + (src + 1) * c, x);
+      if constexpr (kEmbedding) {
+        Lanes8 p1 = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
+        relu_lanes(p1);
+        spill_lanes(hidden, p1);
+        Lanes8 pe = w.c2;
+#pragma GCC unroll 8
+        for (int i = 0; i < 8; ++i) pe += hidden[i] * w.e2[i];
+        store_lanes(x + c, pe);
+      }
+      ++nv;
+    }
+    const int64_t slot = (q - begin) % 4;
+    float* o = a.linear ? row + slot * 16 * ct : out + q * 16 * ct;
+    int64_t c0 = 0;
+    for (; c0 + 16 <= ct; c0 += 16) aggregate_block<Lanes16>(o, ct, xs, stride, c0, hs, nv);
+    if (c0 + 8 <= ct) {
+      aggregate_block<Lanes8>(o, ct, xs, stride, c0, hs, nv);
+      c0 += 8;
+    }
+    // The last ct mod 8 channels (the models' counts are multiples of 8).
+    for (int jj = 0; jj < 16; ++jj) {
+      for (int64_t cc = c0; cc < ct; ++cc) {
+        float sum = 0.0f;
+        for (int64_t t = 0; t < nv; ++t) sum += hs[t * 16 + jj] * xs[t * stride + cc];
+        o[jj * ct + cc] = sum;
+      }
+    }
+    if (a.linear && slot == 3) {
+      apply_linear4(out + (q - 3) * a.n_out, row, 16 * ct, a.linear, a.n_out);
+    } else if (a.linear && q + 1 == end) {
+      for (int64_t r = 0; r <= slot; ++r) {
+        apply_linear(out + (q - slot + r) * a.n_out, row + r * 16 * ct, 16 * ct, a.linear, a.n_out);
+      }
     }
   }
 }
 
-// Floats of inference_rows_body's scratch: the accumulator C'·J, h1 and h2, h, p1 and e.
-int64_t inference_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph) {
-  return ct * j + 2 * hd + j + ph + p;
+// Floats of the inference rows' scratch: for inference_rows_body the aggregate row and the
+// accumulator (C'·J each), h1 and h2, h, p1 and e; for inference_rows_blocked K rows of
+// 16 + blocked_row_stride(C'), 8 for a hidden layer and four aggregate rows.
+int64_t inference_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
+  return std::max(2 * ct * j + 2 * hd + j + ph + p,
+                  k * (16 + blocked_row_stride(ct)) + 8 + 4 * 16 * ct);
+}
+
+template <class D>
+DYNSCOPE_KERNEL_BODY void inference_rows(const InferenceArgs& a, float* out, int64_t begin,
+                                         int64_t end, D d, float* scratch) {
+  if constexpr (kBlockedDims<D>) {
+    inference_rows_blocked(a, out, begin, end, d, scratch);
+  } else {
+    inference_rows_body(a, out, begin, end, d, scratch);
+  }
 }
 
 template <class D>
 void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, int64_t end, D d,
                              float* scratch) {
-  inference_rows_body(a, out, begin, end, d, scratch);
+  inference_rows(a, out, begin, end, d, scratch);
 }
 
 template <class D>
 DYNSCOPE_SIMD_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
                                               int64_t end, D d, float* scratch) {
-  inference_rows_body(a, out, begin, end, d, scratch);
+  inference_rows(a, out, begin, end, d, scratch);
 }
 
 // Offsets of the weight gradients in one flat per-worker buffer, in the transposed layouts the
@@ -224,9 +495,6 @@ DYNSCOPE_KERNEL_BODY void first_layer_weight_grad(float* __restrict dw, float* _
     }
   }
 }
-
-// 16 floats as one value: one AVX-512 register in the v4 clone, two or four in the others.
-typedef float Lanes16 __attribute__((vector_size(64)));
 
 // acc += s · p[0, 16).
 DYNSCOPE_KERNEL_BODY void add_scaled16(Lanes16& acc, float s, const float* p) {
@@ -450,6 +718,28 @@ MlpPrepared prepare_mlp(const torch::Tensor& features, const torch::Tensor& gate
   return m;
 }
 
+// The inference rows over all M queries, parallel over rows: `[M, J·C']`, or `[M, n_out]` when
+// `a` carries a linear.
+torch::Tensor run_inference_rows(const InferenceArgs& a, int64_t m, int64_t j,
+                                 const torch::TensorOptions& options) {
+  const int64_t ct = a.c + a.p;
+  torch::Tensor out = torch::empty({m, a.linear ? a.n_out : j * ct}, options);
+  float* o = out.data_ptr<float>();
+  const bool simd = use_simd_clones();
+  const int64_t scratch = inference_scratch(ct, j, a.hidden, a.p, a.pos_hidden, a.k);
+  with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
+    at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+      std::vector<float> buffer(static_cast<size_t>(scratch));
+      if (simd) {
+        inference_rows_simd(a, o, begin, end, dims, buffer.data());
+      } else {
+        inference_rows_baseline(a, o, begin, end, dims, buffer.data());
+      }
+    });
+  });
+  return out;
+}
+
 struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
   static torch::Tensor forward(AutogradContext* ctx, torch::Tensor features, torch::Tensor gate,
                                torch::Tensor w1, torch::Tensor b1, torch::Tensor w2,
@@ -459,21 +749,7 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     const std::vector<torch::Tensor> w{w1, b1, w2, b2, w3, b3, e1, c1, e2, c2};
     const MlpPrepared prep = prepare_mlp(features, gate, w, rel, index);
     const InferenceArgs a = prep.args();
-    const int64_t m = rel.size(0), j = w3.size(0), ct = a.c + a.p;
-    torch::Tensor out = torch::empty({m, j * ct}, features.options());
-    float* o = out.data_ptr<float>();
-    const bool simd = use_simd_clones();
-    const int64_t scratch = inference_scratch(ct, j, a.hidden, a.p, a.pos_hidden);
-    with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
-      at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
-        std::vector<float> buffer(static_cast<size_t>(scratch));
-        if (simd) {
-          inference_rows_simd(a, o, begin, end, dims, buffer.data());
-        } else {
-          inference_rows_baseline(a, o, begin, end, dims, buffer.data());
-        }
-      });
-    });
+    const torch::Tensor out = run_inference_rows(a, rel.size(0), w3.size(0), features.options());
     ctx->save_for_backward({features, gate, w1, b1, w2, b2, w3, b3, e1, c1, e2, c2, rel, index});
     return out;
   }
@@ -546,10 +822,12 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
 
 }  // namespace
 
-torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torch::Tensor& rel,
-                                       const EdgeMlps& mlps, const torch::Tensor& gate,
-                                       const torch::Tensor& index) {
-  const char* op = "point_conv_aggregate_mlp";
+namespace {
+
+// The checks shared by point_conv_aggregate_mlp and point_conv_aggregate_mlp_linear.
+void check_mlp_arguments(const torch::Tensor& features, const torch::Tensor& rel,
+                         const EdgeMlps& mlps, const torch::Tensor& gate,
+                         const torch::Tensor& index, const char* op) {
   if (features.dim() != 2 || rel.dim() != 3 || rel.size(2) != 3) {
     throw ValueError(op, "features must be [N,C] and rel [M,K,3], got " + shape(features) +
                              " and " + shape(rel));
@@ -579,6 +857,14 @@ torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torc
                      "gate must be float32 [" + std::to_string(m) + "," + std::to_string(k) + "]");
   }
   check_index_range(index, features.size(0), op);
+}
+
+}  // namespace
+
+torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torch::Tensor& rel,
+                                       const EdgeMlps& mlps, const torch::Tensor& gate,
+                                       const torch::Tensor& index) {
+  check_mlp_arguments(features, rel, mlps, gate, index, "point_conv_aggregate_mlp");
   // LibTorch's custom functions need every tensor argument defined: absent ones travel empty.
   auto or_empty = [&](const torch::Tensor& t) {
     return t.defined() ? t : torch::empty({0}, features.options());
@@ -586,6 +872,39 @@ torch::Tensor point_conv_aggregate_mlp(const torch::Tensor& features, const torc
   return MlpAggregateFunction::apply(features, or_empty(gate), mlps.w1, mlps.b1, mlps.w2, mlps.b2,
                                      mlps.w3, mlps.b3, or_empty(mlps.e1), or_empty(mlps.c1),
                                      or_empty(mlps.e2), or_empty(mlps.c2), rel, index);
+}
+
+torch::Tensor point_conv_aggregate_mlp_linear(const torch::Tensor& features,
+                                              const torch::Tensor& rel, const EdgeMlps& mlps,
+                                              const torch::Tensor& gate, const torch::Tensor& index,
+                                              const torch::Tensor& weight) {
+  const char* op = "point_conv_aggregate_mlp_linear";
+  check_mlp_arguments(features, rel, mlps, gate, index, op);
+  const int64_t j = mlps.w3.size(0);
+  const int64_t p = mlps.e1.defined() ? mlps.e2.size(0) : 0;
+  const int64_t n_in = j * (features.size(1) + p);
+  if (weight.dim() != 2 || weight.size(1) != n_in || weight.scalar_type() != torch::kFloat) {
+    throw ValueError(
+        op, "weight must be float32 [C_out," + std::to_string(n_in) + "], got " + shape(weight));
+  }
+  bool records_grad = false;
+  if (torch::GradMode::is_enabled()) {
+    for (const torch::Tensor& t : {features, gate, mlps.w1, mlps.b1, mlps.w2, mlps.b2, mlps.w3,
+                                   mlps.b3, mlps.e1, mlps.c1, mlps.e2, mlps.c2, weight}) {
+      records_grad = records_grad || (t.defined() && t.requires_grad());
+    }
+  }
+  if (records_grad) {
+    return torch::mm(point_conv_aggregate_mlp(features, rel, mlps, gate, index), weight.t());
+  }
+  const std::vector<torch::Tensor> w{mlps.w1, mlps.b1, mlps.w2, mlps.b2, mlps.w3,
+                                     mlps.b3, mlps.e1, mlps.c1, mlps.e2, mlps.c2};
+  const MlpPrepared prep = prepare_mlp(features, gate, w, rel, index);
+  const torch::Tensor linear = contiguous(weight);
+  InferenceArgs a = prep.args();
+  a.linear = linear.data_ptr<float>();
+  a.n_out = weight.size(0);
+  return run_inference_rows(a, rel.size(0), j, features.options());
 }
 
 }  // namespace dynscope

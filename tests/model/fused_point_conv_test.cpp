@@ -285,6 +285,12 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
       }
       const torch::Tensor fused = conv->forward(cs.query, cs.source, cs.features, cs.nb);
       EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
+      {
+        // Inference: the linear runs inside the aggregation op.
+        torch::NoGradGuard no_grad;
+        const torch::Tensor inferred = conv->forward(cs.query, cs.source, cs.features, cs.nb);
+        EXPECT_TRUE(torch::allclose(inferred, ref, 1e-5, 1e-5)) << (inferred - ref).abs().max();
+      }
       // The same through a prepared list (what a hierarchy's forward pass uses).
       NeighborTensors prepared = cs.nb;
       prepared.prepare(cs.query, cs.source);
@@ -295,44 +301,102 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
   }
 }
 
+// point_conv_aggregate_mlp_linear against the aggregation followed by torch::mm: without
+// gradients (the linear inside the op, four queries at a time: 50 queries leave two over) for
+// output counts below, at and past multiples of 4 and the kernels' channel arrangements; with
+// gradients (the two ops) the same values and a gradient in the linear's weight; a weight of
+// the wrong shape is refused.
+TEST(FusedPointConvTest, TheMlpAggregationWithItsLinearMatchesTheTwoOps) {
+  for (int64_t c_mid : {16, 4}) {
+    for (bool gated : {false, true}) {
+      for (int64_t pos : {0, 8}) {
+        for (int64_t channels : {6, 8, 45}) {
+          ConvCase cs = make_conv_case(60, 50, 7, channels, 40 + c_mid + gated + pos + channels);
+          PointConv conv(PointConvOptions(channels, 9).c_mid(c_mid).pos_channels(pos));
+          NeighborTensors nb = cs.nb;
+          nb.prepare(cs.query, cs.source);
+          const torch::Tensor rel = nb.rel * 3.0f;
+          const torch::Tensor index = masked_index(nb);
+          const torch::Tensor gate =
+              gated ? torch::rand({nb.rows(), index.size(1)}) : torch::Tensor();
+          const int64_t n_in = c_mid * (channels + pos);
+          for (int64_t n_out : {1, 4, 9, 32}) {
+            const torch::Tensor weight = torch::randn({n_out, n_in});
+            torch::Tensor fused, ref;
+            {
+              torch::NoGradGuard no_grad;
+              fused = point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
+                                                      index, weight);
+              ref = torch::mm(
+                  point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index),
+                  weight.t());
+            }
+            ASSERT_EQ(fused.sizes(), ref.sizes());
+            EXPECT_TRUE(torch::allclose(fused, ref, 1e-4, 1e-5))
+                << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " channels "
+                << channels << " outputs " << n_out << ": " << (fused - ref).abs().max();
+          }
+          const torch::Tensor weight = torch::randn({3, n_in}).requires_grad_(true);
+          const torch::Tensor with_grad = point_conv_aggregate_mlp_linear(
+              cs.features, rel, conv->edge_mlps(), gate, index, weight);
+          EXPECT_TRUE(with_grad.requires_grad());
+          with_grad.sum().backward();
+          ASSERT_TRUE(weight.grad().defined());
+          EXPECT_GT(weight.grad().abs().sum().item<float>(), 0.0f);
+          EXPECT_THROW(point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
+                                                       index, torch::zeros({3, n_in + 1})),
+                       ValueError);
+        }
+      }
+    }
+  }
+}
+
 // point_conv_aggregate_mlp (edge MLPs evaluated inside the aggregation, forward and backward)
 // against its composition from LibTorch ops and point_conv_aggregate: outputs and gradients in
 // features, gate and every MLP weight, at the default filter width 16 and at 4, with and without
-// a gate and a positional embedding.
+// a gate and a positional embedding. The feature counts give the model's sizes' kernel every
+// arrangement of its channel blocks (with the embedding's 8 or without: 6 + 8 and 6 a tail
+// only, 8 + 8 one block of 16 and 8 one of 8, 32 + 8 blocks of 16 and 8, 45 + 8 and 45 blocks of
+// 16, 8 and a tail).
 TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
   for (int64_t c_mid : {16, 4}) {
     for (bool gated : {false, true}) {
       for (int64_t pos : {0, 8}) {
-        ConvCase cs = make_conv_case(60, 50, 7, 6, 20 + c_mid + gated + pos);
-        PointConv conv(PointConvOptions(6, 9).c_mid(c_mid).pos_channels(pos));
-        NeighborTensors nb = cs.nb;
-        nb.prepare(cs.query, cs.source);
-        const torch::Tensor rel = nb.rel * 3.0f;
-        const torch::Tensor index = masked_index(nb);
-        torch::Tensor gate;
-        if (gated) gate = torch::rand({nb.rows(), nb.index.size(1)}).requires_grad_(true);
-        const torch::Tensor fused =
-            point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
-        torch::Tensor h = conv->weightnet->forward(rel);
-        if (gated) h = h * gate.unsqueeze(-1);
-        const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
-        const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
-        ASSERT_EQ(fused.sizes(), ref.sizes());
-        EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5)) << (fused - ref).abs().max();
-        std::vector<torch::Tensor> wrt{cs.features};
-        if (gated) wrt.push_back(gate);
-        for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
-        if (pos) {
-          for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
-        }
-        const torch::Tensor w = torch::randn_like(ref);
-        const auto gf = grads_of(fused, w, wrt);
-        const auto gr = grads_of(ref, w, wrt);
-        ASSERT_EQ(gf.size(), gr.size());
-        for (size_t i = 0; i < gf.size(); ++i) {
-          EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-4, 1e-5))
-              << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " gradient " << i
-              << " differs by " << (gf[i] - gr[i]).abs().max();
+        for (int64_t channels : {6, 8, 32, 45}) {
+          if (c_mid == 4 && channels != 6) continue;  // the general kernel has no blocks
+          ConvCase cs = make_conv_case(60, 50, 7, channels, 20 + c_mid + gated + pos + channels);
+          PointConv conv(PointConvOptions(channels, 9).c_mid(c_mid).pos_channels(pos));
+          NeighborTensors nb = cs.nb;
+          nb.prepare(cs.query, cs.source);
+          const torch::Tensor rel = nb.rel * 3.0f;
+          const torch::Tensor index = masked_index(nb);
+          torch::Tensor gate;
+          if (gated) gate = torch::rand({nb.rows(), nb.index.size(1)}).requires_grad_(true);
+          const torch::Tensor fused =
+              point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
+          torch::Tensor h = conv->weightnet->forward(rel);
+          if (gated) h = h * gate.unsqueeze(-1);
+          const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
+          const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
+          ASSERT_EQ(fused.sizes(), ref.sizes());
+          EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
+              << "channels " << channels << ": " << (fused - ref).abs().max();
+          std::vector<torch::Tensor> wrt{cs.features};
+          if (gated) wrt.push_back(gate);
+          for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
+          if (pos) {
+            for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
+          }
+          const torch::Tensor w = torch::randn_like(ref);
+          const auto gf = grads_of(fused, w, wrt);
+          const auto gr = grads_of(ref, w, wrt);
+          ASSERT_EQ(gf.size(), gr.size());
+          for (size_t i = 0; i < gf.size(); ++i) {
+            EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-4, 1e-5))
+                << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " channels "
+                << channels << " gradient " << i << " differs by " << (gf[i] - gr[i]).abs().max();
+          }
         }
       }
     }
