@@ -616,16 +616,209 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
   }
 }
 
+// The rows of W3 (`[16][8]`), W2 and E2 (`[8][8]`) as vectors over their inputs, for the input
+// gradients dx = Σ_o dy[o] · W[o,:] of mlp_grad_rows_blocked.
+struct BlockedGradWeights {
+  Lanes8 w3[16], w2[8], e2[8];
+};
+
+DYNSCOPE_KERNEL_BODY BlockedGradWeights blocked_grad_weights(const InferenceArgs& a,
+                                                             bool embedding) {
+  BlockedGradWeights g{};
+  for (int o = 0; o < 16; ++o) {
+    for (int i = 0; i < 8; ++i) g.w3[o][i] = a.w3t[i * 16 + o];
+  }
+  for (int o = 0; o < 8; ++o) {
+    for (int i = 0; i < 8; ++i) g.w2[o][i] = a.w2t[i * 8 + o];
+  }
+  if (embedding) {
+    for (int o = 0; o < 8; ++o) {
+      for (int i = 0; i < 8; ++i) g.e2[o][i] = a.e2t[i * 8 + o];
+    }
+  }
+  return g;
+}
+
+// dx[c0, c0 + lanes of V) = Σ_j s[j] · g[j·C' + c0, ...) over the 16 filter rows, in two chains.
+template <class V>
+DYNSCOPE_KERNEL_BODY void combine_block(float* __restrict dx, const float* __restrict g, int64_t ct,
+                                        int64_t c0, const float* __restrict s) {
+  V even = {}, odd = {};
+#pragma GCC unroll 8
+  for (int jj = 0; jj < 16; jj += 2) {
+    V a, b;
+    load_lanes(a, g + jj * ct + c0);
+    load_lanes(b, g + (jj + 1) * ct + c0);
+    even += s[jj] * a;
+    odd += s[jj + 1] * b;
+  }
+  const V sum = even + odd;
+  store_lanes(dx + c0, sum);
+}
+
+// mlp_grad_rows_body for the model's MLP sizes, arranged for the vector units as
+// inference_rows_blocked: every per-neighbour vector (h1, h2, h, the embedding's, their
+// gradients) is computed whole, a layer's inputs read back from memory as broadcasts; the input
+// gradients of the MLPs' linears run over W's rows (Σ_o dy[o]·W[o,:]) instead of one dot product
+// per input; the filter gradient sums over the channels in four chains; the feature gradient
+// sums G's rows (padded by zeros to a multiple of 8 channels) in blocks of 16 and 8. The same
+// per-query weight gradients follow.
+template <class D>
+DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const float* grad,
+                                                float* d_feat, float* d_gate, float* dw,
+                                                const MlpGradLayout& lay, int64_t begin,
+                                                int64_t end, D d, float* scratch, int64_t* edges) {
+  constexpr bool kEmbedding = D{}.P() == 8;
+  const int64_t c = a.c, ct = c + d.P(), k = a.k;
+  const BlockedWeights w = blocked_weights(a, kEmbedding);
+  const BlockedGradWeights wg = blocked_grad_weights(a, kEmbedding);
+  const int64_t cp = blocked_row_stride(ct);
+  float* gt = scratch;       // [C'][16]: G transposed
+  float* gp = gt + ct * 16;  // [16][cp]: G with its rows padded by zeros to a multiple of 8
+  float* x = gp + 16 * cp;   // [C' + 8]: the neighbour's features and embedding
+  float* dx = x + ct + 8;    // [C' + 8]: their gradient
+  float* hk = dx + ct + 8;   // [16]: h before the gate
+  float* hg = hk + 16;       // [16]: h after the gate
+  float* h1 = hg + 16;       // [K][8]
+  float* h2 = h1 + k * 8;    // [K][8]
+  float* dh = h2 + k * 8;    // [K][16]: gradient of h before the gate
+  float* dh2 = dh + k * 16;  // [K][8]
+  float* dh1 = dh2 + k * 8;  // [K][8]
+  float* p1 = dh1 + k * 8;   // [K][8]
+  float* de = p1 + k * 8;    // [K][8]: gradient of the embedding
+  float* dp1 = de + k * 8;   // [K][8]
+  for (int64_t q = begin; q < end; ++q) {
+    const float* g = grad + q * 16 * ct;
+    for (int64_t jj = 0; jj < 16; ++jj) {
+      for (int64_t cc = 0; cc < ct; ++cc) gt[cc * 16 + jj] = g[jj * ct + cc];
+      std::copy(g + jj * ct, g + (jj + 1) * ct, gp + jj * cp);
+      std::fill(gp + jj * cp + ct, gp + (jj + 1) * cp, 0.0f);
+    }
+    int64_t nv = 0;
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t e = q * k + n;
+      const int64_t src = a.index[e];
+      if (src < 0) continue;
+      const float* r = a.rel + e * 3;
+      const float gate = a.gate ? a.gate[e] : 1.0f;
+      float* h1e = h1 + nv * 8;
+      float* h2e = h2 + nv * 8;
+      Lanes8 v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
+      relu_lanes(v1);
+      spill_lanes(h1e, v1);
+      Lanes8 v2 = w.b2;
+#pragma GCC unroll 8
+      for (int i = 0; i < 8; ++i) v2 += h1e[i] * w.w2[i];
+      relu_lanes(v2);
+      spill_lanes(h2e, v2);
+      Lanes16 h = w.b3;
+#pragma GCC unroll 8
+      for (int i = 0; i < 8; ++i) h += h2e[i] * w.w3[i];
+      store_lanes(hk, h);
+      const Lanes16 gated = h * gate;
+      spill_lanes(hg, gated);
+      std::copy(a.features + src * c, a.features + (src + 1) * c, x);
+      if constexpr (kEmbedding) {
+        Lanes8 vp = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
+        relu_lanes(vp);
+        spill_lanes(p1 + nv * 8, vp);
+        Lanes8 pe = w.c2;
+#pragma GCC unroll 8
+        for (int i = 0; i < 8; ++i) pe += p1[nv * 8 + i] * w.e2[i];
+        store_lanes(x + c, pe);
+      }
+      // d(gated h)[j] = Σ_c G[j,c] x[c], four chains over the channels.
+      Lanes16 chain[4] = {};
+      int64_t cc = 0;
+      for (; cc + 4 <= ct; cc += 4) {
+#pragma GCC unroll 4
+        for (int u = 0; u < 4; ++u) {
+          Lanes16 row;
+          load_lanes(row, gt + (cc + u) * 16);
+          chain[u] += x[cc + u] * row;
+        }
+      }
+      for (; cc < ct; ++cc) {
+        Lanes16 row;
+        load_lanes(row, gt + cc * 16);
+        chain[0] += x[cc] * row;
+      }
+      const Lanes16 dgated = (chain[0] + chain[1]) + (chain[2] + chain[3]);
+      // dx[c] = Σ_j gate·h[j] G[j,c].
+      int64_t c0 = 0;
+      for (; c0 + 16 <= cp; c0 += 16) combine_block<Lanes16>(dx, gp, cp, c0, hg);
+      if (c0 < cp) combine_block<Lanes8>(dx, gp, cp, c0, hg);
+      if (d_feat) {
+        float* __restrict dst = d_feat + src * c;
+#pragma omp simd
+        for (int64_t i = 0; i < c; ++i) dst[i] += dx[i];
+      }
+      if (d_gate) d_gate[e] = lane_sum(dgated * h);
+      // WeightNet: h = W3 h2 + b3, h2 = relu(W2 h1 + b2), h1 = relu(W1 r + b1).
+      float* dhe = dh + nv * 16;
+      spill_lanes(dhe, dgated * gate);
+      Lanes8 g2 = {};
+#pragma GCC unroll 16
+      for (int o = 0; o < 16; ++o) g2 += dhe[o] * wg.w3[o];
+      g2 = v2 > 0.0f ? g2 : Lanes8{};
+      spill_lanes(dh2 + nv * 8, g2);
+      Lanes8 g1 = {};
+#pragma GCC unroll 8
+      for (int o = 0; o < 8; ++o) g1 += dh2[nv * 8 + o] * wg.w2[o];
+      g1 = v1 > 0.0f ? g1 : Lanes8{};
+      store_lanes(dh1 + nv * 8, g1);
+      if constexpr (kEmbedding) {
+        // e = E2 p1 + c2, p1 = relu(E1 r + c1); de = dx[C:].
+        float* dee = de + nv * 8;
+        std::copy(dx + c, dx + ct, dee);
+        Lanes8 gp = {};
+#pragma GCC unroll 8
+        for (int o = 0; o < 8; ++o) gp += dee[o] * wg.e2[o];
+        Lanes8 vp;
+        load_lanes(vp, p1 + nv * 8);
+        gp = vp > 0.0f ? gp : Lanes8{};
+        store_lanes(dp1 + nv * 8, gp);
+      }
+      edges[nv++] = e;
+    }
+    if (nv == 0) continue;
+    linear_weight_grad(dw + lay.w3t, dw + lay.b3, h2, 8, dh, 16, nv);
+    linear_weight_grad(dw + lay.w2t, dw + lay.b2, h1, 8, dh2, 8, nv);
+    first_layer_weight_grad(dw + lay.w1, dw + lay.b1, a.rel, edges, dh1, 8, nv);
+    if constexpr (kEmbedding) {
+      linear_weight_grad(dw + lay.e2t, dw + lay.c2, p1, 8, de, 8, nv);
+      first_layer_weight_grad(dw + lay.e1, dw + lay.c1, a.rel, edges, dp1, 8, nv);
+    }
+  }
+}
+
 // Floats of mlp_grad_rows_body's scratch.
 int64_t mlp_grad_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
-  return ct * j + j * padded16(ct) + ct + padded16(ct) + 2 * j + k * (4 * hd + j + 2 * ph + p);
+  // mlp_grad_rows_blocked's: G transposed, x and dx (padded by 8), h and gated h, and per
+  // neighbour h1, h2, dh, dh2, dh1, p1, de and dp1.
+  const int64_t blocked =
+      ct * 16 + 16 * blocked_row_stride(ct) + 2 * (ct + 8) + 32 + k * (7 * 8 + 16);
+  return std::max(blocked, ct * j + j * padded16(ct) + ct + padded16(ct) + 2 * j +
+                               k * (4 * hd + j + 2 * ph + p));
+}
+
+template <class D>
+DYNSCOPE_KERNEL_BODY void mlp_grad_rows(const InferenceArgs& a, const float* grad, float* d_feat,
+                                        float* d_gate, float* dw, const MlpGradLayout& lay,
+                                        int64_t begin, int64_t end, D d, float* scratch,
+                                        int64_t* edges) {
+  if constexpr (kBlockedDims<D>) {
+    mlp_grad_rows_blocked(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  } else {
+    mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  }
 }
 
 template <class D>
 void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_feat, float* d_gate,
                             float* dw, const MlpGradLayout& lay, int64_t begin, int64_t end, D d,
                             float* scratch, int64_t* edges) {
-  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  mlp_grad_rows(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
 }
 
 template <class D>
@@ -633,7 +826,7 @@ DYNSCOPE_SIMD_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float
                                              float* d_feat, float* d_gate, float* dw,
                                              const MlpGradLayout& lay, int64_t begin, int64_t end,
                                              D d, float* scratch, int64_t* edges) {
-  mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  mlp_grad_rows(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
 }
 
 // What the MLP aggregation's kernels read, prepared once per call: contiguous float inputs and the
