@@ -309,13 +309,28 @@ template <class D>
 DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* out, int64_t begin,
                                                  int64_t end, D d, float* scratch) {
   constexpr bool kEmbedding = D{}.P() == 8;
-  const int64_t c = a.c, ct = c + d.P(), k = a.k, stride = blocked_row_stride(ct);
+  const int64_t c = a.c, ct = c + d.P(), k = a.k, cp = blocked_row_stride(ct);
+  // C' not a multiple of 8 (the movi-a model's bottleneck leaves 6 and 12 channels): the rows
+  // are padded by zeros to cp, aggregated whole and compacted after (or the linear's weight is
+  // padded alike), so no channel is left to a scalar tail.
+  const bool padded = cp != ct;
   const BlockedWeights w = blocked_weights(a, kEmbedding);
-  float* hs = scratch;              // [K][16]: each valid neighbour's gated h
-  float* xs = hs + k * 16;          // [K][stride]: its features and embedding
-  float* hidden = xs + k * stride;  // [8]: a hidden layer's output, read one float at a time
-  float* row =
-      hidden + 8;  // [4][16·C']: the aggregate rows of up to 4 queries when a linear follows
+  float* hs = scratch;          // [K][16]: each valid neighbour's gated h
+  float* xs = hs + k * 16;      // [K][cp]: its features and embedding, zero-padded
+  float* hidden = xs + k * cp;  // [8]: a hidden layer's output, read one float at a time
+  float* row = hidden + 8;      // [4][16·cp]: aggregate rows, of up to 4 queries for a linear
+  std::vector<float> padded_linear;
+  const float* linear = a.linear;
+  if (linear && padded) {
+    padded_linear.assign(static_cast<size_t>(a.n_out * 16 * cp), 0.0f);
+    for (int64_t o = 0; o < a.n_out; ++o) {
+      for (int64_t jj = 0; jj < 16; ++jj) {
+        const float* from = a.linear + (o * 16 + jj) * ct;
+        std::copy(from, from + ct, padded_linear.data() + (o * 16 + jj) * cp);
+      }
+    }
+    linear = padded_linear.data();
+  }
   for (int64_t q = begin; q < end; ++q) {
     int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
@@ -336,7 +351,7 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
       for (int i = 0; i < 8; ++i) h += hidden[i] * w.w3[i];
       if (a.gate) h *= a.gate[e];
       store_lanes(hs + nv * 16, h);
-      float* x = xs + nv * stride;
+      float* x = xs + nv * cp;
       std::copy(a.features + src * c, a.features + (src + 1) * c, x);
       if constexpr (kEmbedding) {
         Lanes8 p1 = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
@@ -347,29 +362,26 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
         for (int i = 0; i < 8; ++i) pe += hidden[i] * w.e2[i];
         store_lanes(x + c, pe);
       }
+      std::fill(x + ct, x + cp, 0.0f);
       ++nv;
     }
     const int64_t slot = (q - begin) % 4;
-    float* o = a.linear ? row + slot * 16 * ct : out + q * 16 * ct;
+    // The aggregate row, [16][cp]: straight into the output when it has that layout.
+    float* o = (linear || padded) ? row + slot * 16 * cp : out + q * 16 * ct;
     int64_t c0 = 0;
-    for (; c0 + 16 <= ct; c0 += 16) aggregate_block<Lanes16>(o, ct, xs, stride, c0, hs, nv);
-    if (c0 + 8 <= ct) {
-      aggregate_block<Lanes8>(o, ct, xs, stride, c0, hs, nv);
-      c0 += 8;
-    }
-    // The last ct mod 8 channels (the models' counts are multiples of 8).
-    for (int jj = 0; jj < 16; ++jj) {
-      for (int64_t cc = c0; cc < ct; ++cc) {
-        float sum = 0.0f;
-        for (int64_t t = 0; t < nv; ++t) sum += hs[t * 16 + jj] * xs[t * stride + cc];
-        o[jj * ct + cc] = sum;
+    for (; c0 + 16 <= cp; c0 += 16) aggregate_block<Lanes16>(o, cp, xs, cp, c0, hs, nv);
+    if (c0 < cp) aggregate_block<Lanes8>(o, cp, xs, cp, c0, hs, nv);
+    if (!linear) {
+      if (padded) {
+        for (int64_t jj = 0; jj < 16; ++jj) {
+          std::copy(o + jj * cp, o + jj * cp + ct, out + (q * 16 + jj) * ct);
+        }
       }
-    }
-    if (a.linear && slot == 3) {
-      apply_linear4(out + (q - 3) * a.n_out, row, 16 * ct, a.linear, a.n_out);
-    } else if (a.linear && q + 1 == end) {
+    } else if (slot == 3) {
+      apply_linear4(out + (q - 3) * a.n_out, row, 16 * cp, linear, a.n_out);
+    } else if (q + 1 == end) {
       for (int64_t r = 0; r <= slot; ++r) {
-        apply_linear(out + (q - slot + r) * a.n_out, row + r * 16 * ct, 16 * ct, a.linear, a.n_out);
+        apply_linear(out + (q - slot + r) * a.n_out, row + r * 16 * cp, 16 * cp, linear, a.n_out);
       }
     }
   }
@@ -377,10 +389,10 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
 
 // Floats of the inference rows' scratch: for inference_rows_body the aggregate row and the
 // accumulator (C'·J each), h1 and h2, h, p1 and e; for inference_rows_blocked K rows of
-// 16 + blocked_row_stride(C'), 8 for a hidden layer and four aggregate rows.
+// 16 + blocked_row_stride(C'), 8 for a hidden layer and four aggregate rows of 16 such.
 int64_t inference_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
   return std::max(2 * ct * j + 2 * hd + j + ph + p,
-                  k * (16 + blocked_row_stride(ct)) + 8 + 4 * 16 * ct);
+                  k * (16 + blocked_row_stride(ct)) + 8 + 4 * 16 * blocked_row_stride(ct));
 }
 
 template <class D>

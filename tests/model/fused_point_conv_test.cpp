@@ -356,9 +356,9 @@ TEST(FusedPointConvTest, TheMlpAggregationWithItsLinearMatchesTheTwoOps) {
 // against its composition from LibTorch ops and point_conv_aggregate: outputs and gradients in
 // features, gate and every MLP weight, at the default filter width 16 and at 4, with and without
 // a gate and a positional embedding. The feature counts give the model's sizes' kernel every
-// arrangement of its channel blocks (with the embedding's 8 or without: 6 + 8 and 6 a tail
-// only, 8 + 8 one block of 16 and 8 one of 8, 32 + 8 blocks of 16 and 8, 45 + 8 and 45 blocks of
-// 16, 8 and a tail).
+// arrangement of its channel blocks (with the embedding's 8 or without: 6 + 8 and 6 rows padded
+// to 16 and 8, 8 + 8 one block of 16 and 8 one of 8, 32 + 8 blocks of 16 and 8, 45 + 8 and 45
+// padded to 56 and 48).
 TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
   for (int64_t c_mid : {16, 4}) {
     for (bool gated : {false, true}) {
