@@ -270,11 +270,11 @@ DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool
   return w;
 }
 
-// out[j·C' + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j < 16 and i < the lanes of V
-// (16 or 8): one block of channels of a query's aggregation over its nv gathered neighbour rows,
-// the 16 sums (one per filter row) kept in registers and each output written once.
+// out[j·out_stride + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j < 16 and i < the
+// lanes of V (16 or 8): one block of channels of a query's aggregation over its nv gathered
+// neighbour rows, the 16 sums (one per filter row) kept in registers and each output written once.
 template <class V>
-DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t ct,
+DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t out_stride,
                                           const float* __restrict x, int64_t stride, int64_t c0,
                                           const float* __restrict h, int64_t nv) {
   V acc[16] = {};
@@ -286,7 +286,7 @@ DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t ct,
     for (int jj = 0; jj < 16; ++jj) acc[jj] += ht[jj] * xt;
   }
 #pragma GCC unroll 16
-  for (int jj = 0; jj < 16; ++jj) store_lanes(out + jj * ct + c0, acc[jj]);
+  for (int jj = 0; jj < 16; ++jj) store_lanes(out + jj * out_stride + c0, acc[jj]);
 }
 
 // Vector values of a small array in memory, read back one float at a time: the compiler must load
