@@ -270,6 +270,45 @@ DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool
   return w;
 }
 
+// Vector values of a small array in memory, read back one float at a time: the compiler must load
+// them from memory (a broadcast load per use) instead of extracting each lane from the register,
+// which costs a shuffle or two per lane.
+template <class V>
+DYNSCOPE_KERNEL_BODY void spill_lanes(float* to, const V& v) {
+  store_lanes(to, v);
+  asm("" : : "r"(to) : "memory");
+}
+
+// One neighbour's WeightNet at relative position r: h = W3·h2 + b3 with h2 = relu(W2·h1 + b2) and
+// h1 = relu(W1·r + b1). The hidden layers are left in `v1`, `v2` and in memory at `h1`, `h2` (8
+// floats each; the same place will do when only h is wanted).
+DYNSCOPE_KERNEL_BODY void weightnet(const BlockedWeights& w, const float* r, float* h1, float* h2,
+                                    Lanes8& v1, Lanes8& v2, Lanes16& h) {
+  v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
+  relu_lanes(v1);
+  spill_lanes(h1, v1);
+  v2 = w.b2;
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) v2 += h1[i] * w.w2[i];
+  relu_lanes(v2);
+  spill_lanes(h2, v2);
+  h = w.b3;
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) h += h2[i] * w.w3[i];
+}
+
+// One neighbour's positional embedding: e = E2·p1 + c2 with p1 = relu(E1·r + c1), p1 left in `vp`
+// and in memory at `p1`.
+DYNSCOPE_KERNEL_BODY void embedding(const BlockedWeights& w, const float* r, float* p1, Lanes8& vp,
+                                    Lanes8& e) {
+  vp = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
+  relu_lanes(vp);
+  spill_lanes(p1, vp);
+  e = w.c2;
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) e += p1[i] * w.e2[i];
+}
+
 // out[j·out_stride + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j < 16 and i < the
 // lanes of V (16 or 8): one block of channels of a query's aggregation over its nv gathered
 // neighbour rows, the 16 sums (one per filter row) kept in registers and each output written once.
@@ -287,15 +326,6 @@ DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t out_str
   }
 #pragma GCC unroll 16
   for (int jj = 0; jj < 16; ++jj) store_lanes(out + jj * out_stride + c0, acc[jj]);
-}
-
-// Vector values of a small array in memory, read back one float at a time: the compiler must load
-// them from memory (a broadcast load per use) instead of extracting each lane from the register,
-// which costs a shuffle or two per lane.
-template <class V>
-DYNSCOPE_KERNEL_BODY void spill_lanes(float* to, const V& v) {
-  store_lanes(to, v);
-  asm("" : : "r"(to) : "memory");
 }
 
 // inference_rows_body for the model's MLP sizes, arranged for the vector units. Per query, each
@@ -338,28 +368,16 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
       const int64_t src = a.index[e];
       if (src < 0) continue;
       const float* r = a.rel + e * 3;
-      Lanes8 h1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
-      relu_lanes(h1);
-      spill_lanes(hidden, h1);
-      Lanes8 h2 = w.b2;
-#pragma GCC unroll 8
-      for (int i = 0; i < 8; ++i) h2 += hidden[i] * w.w2[i];
-      relu_lanes(h2);
-      spill_lanes(hidden, h2);
-      Lanes16 h = w.b3;
-#pragma GCC unroll 8
-      for (int i = 0; i < 8; ++i) h += hidden[i] * w.w3[i];
+      Lanes8 v1, v2;
+      Lanes16 h;
+      weightnet(w, r, hidden, hidden, v1, v2, h);
       if (a.gate) h *= a.gate[e];
       store_lanes(hs + nv * 16, h);
       float* x = xs + nv * cp;
       std::copy(a.features + src * c, a.features + (src + 1) * c, x);
       if constexpr (kEmbedding) {
-        Lanes8 p1 = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
-        relu_lanes(p1);
-        spill_lanes(hidden, p1);
-        Lanes8 pe = w.c2;
-#pragma GCC unroll 8
-        for (int i = 0; i < 8; ++i) pe += hidden[i] * w.e2[i];
+        Lanes8 vp, pe;
+        embedding(w, r, hidden, vp, pe);
         store_lanes(x + c, pe);
       }
       std::fill(x + ct, x + cp, 0.0f);
@@ -535,6 +553,18 @@ DYNSCOPE_KERNEL_BODY void combine_rows(float* __restrict y, const float* __restr
   }
 }
 
+// One query's output gradient g (`[J][C']`) as the backward kernels read it: transposed, gt
+// `[C'][J]`, and with its rows padded by zeros to cp >= C', gp `[J][cp]`.
+DYNSCOPE_KERNEL_BODY void transpose_and_pad(const float* __restrict g, int64_t j, int64_t ct,
+                                            float* __restrict gt, float* __restrict gp,
+                                            int64_t cp) {
+  for (int64_t jj = 0; jj < j; ++jj) {
+    for (int64_t cc = 0; cc < ct; ++cc) gt[cc * j + jj] = g[jj * ct + cc];
+    std::copy(g + jj * ct, g + (jj + 1) * ct, gp + jj * cp);
+    std::fill(gp + jj * cp + ct, gp + (jj + 1) * cp, 0.0f);
+  }
+}
+
 // Gradients of the MLP aggregation for rows [begin, end). Per query: each valid neighbour's h and
 // e are recomputed and its feature, gate and hidden-layer gradients computed; then the weight
 // gradients of all the query's neighbours are added at once. `d_feat` is this worker's `[N,C]`
@@ -566,11 +596,7 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_body(const InferenceArgs& a, const float
   float* dp1 = de + k * p;   // [K][P']
   for (int64_t q = begin; q < end; ++q) {
     const float* g = grad + q * j * ct;
-    for (int64_t jj = 0; jj < j; ++jj) {
-      for (int64_t cc = 0; cc < ct; ++cc) gt[cc * j + jj] = g[jj * ct + cc];
-      std::copy(g + jj * ct, g + (jj + 1) * ct, gp + jj * cp);
-      std::fill(gp + jj * cp + ct, gp + (jj + 1) * cp, 0.0f);
-    }
+    transpose_and_pad(g, j, ct, gt, gp, cp);
     int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
       const int64_t e = q * k + n;
@@ -689,8 +715,7 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
   float* gp = gt + ct * 16;  // [16][cp]: G with its rows padded by zeros to a multiple of 8
   float* x = gp + 16 * cp;   // [C' + 8]: the neighbour's features and embedding
   float* dx = x + ct + 8;    // [C' + 8]: their gradient
-  float* hk = dx + ct + 8;   // [16]: h before the gate
-  float* hg = hk + 16;       // [16]: h after the gate
+  float* hg = dx + ct + 8;   // [16]: h after the gate
   float* h1 = hg + 16;       // [K][8]
   float* h2 = h1 + k * 8;    // [K][8]
   float* dh = h2 + k * 8;    // [K][16]: gradient of h before the gate
@@ -701,11 +726,7 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
   float* dp1 = de + k * 8;   // [K][8]
   for (int64_t q = begin; q < end; ++q) {
     const float* g = grad + q * 16 * ct;
-    for (int64_t jj = 0; jj < 16; ++jj) {
-      for (int64_t cc = 0; cc < ct; ++cc) gt[cc * 16 + jj] = g[jj * ct + cc];
-      std::copy(g + jj * ct, g + (jj + 1) * ct, gp + jj * cp);
-      std::fill(gp + jj * cp + ct, gp + (jj + 1) * cp, 0.0f);
-    }
+    transpose_and_pad(g, 16, ct, gt, gp, cp);
     int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
       const int64_t e = q * k + n;
@@ -713,30 +734,15 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
       if (src < 0) continue;
       const float* r = a.rel + e * 3;
       const float gate = a.gate ? a.gate[e] : 1.0f;
-      float* h1e = h1 + nv * 8;
-      float* h2e = h2 + nv * 8;
-      Lanes8 v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
-      relu_lanes(v1);
-      spill_lanes(h1e, v1);
-      Lanes8 v2 = w.b2;
-#pragma GCC unroll 8
-      for (int i = 0; i < 8; ++i) v2 += h1e[i] * w.w2[i];
-      relu_lanes(v2);
-      spill_lanes(h2e, v2);
-      Lanes16 h = w.b3;
-#pragma GCC unroll 8
-      for (int i = 0; i < 8; ++i) h += h2e[i] * w.w3[i];
-      store_lanes(hk, h);
+      Lanes8 v1, v2;
+      Lanes16 h;
+      weightnet(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, h);
       const Lanes16 gated = h * gate;
       spill_lanes(hg, gated);
       std::copy(a.features + src * c, a.features + (src + 1) * c, x);
       if constexpr (kEmbedding) {
-        Lanes8 vp = w.c1 + w.e1[0] * r[0] + w.e1[1] * r[1] + w.e1[2] * r[2];
-        relu_lanes(vp);
-        spill_lanes(p1 + nv * 8, vp);
-        Lanes8 pe = w.c2;
-#pragma GCC unroll 8
-        for (int i = 0; i < 8; ++i) pe += p1[nv * 8 + i] * w.e2[i];
+        Lanes8 vp, pe;
+        embedding(w, r, p1 + nv * 8, vp, pe);
         store_lanes(x + c, pe);
       }
       // d(gated h)[j] = Σ_c G[j,c] x[c], four chains over the channels.
@@ -806,10 +812,10 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
 
 // Floats of mlp_grad_rows_body's scratch.
 int64_t mlp_grad_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t ph, int64_t k) {
-  // mlp_grad_rows_blocked's: G transposed, x and dx (padded by 8), h and gated h, and per
+  // mlp_grad_rows_blocked's: G transposed and padded, x and dx (padded by 8), gated h, and per
   // neighbour h1, h2, dh, dh2, dh1, p1, de and dp1.
   const int64_t blocked =
-      ct * 16 + 16 * blocked_row_stride(ct) + 2 * (ct + 8) + 32 + k * (7 * 8 + 16);
+      ct * 16 + 16 * blocked_row_stride(ct) + 2 * (ct + 8) + 16 + k * (7 * 8 + 16);
   return std::max(blocked, ct * j + j * padded16(ct) + ct + padded16(ct) + 2 * j +
                                k * (4 * hd + j + 2 * ph + p));
 }
