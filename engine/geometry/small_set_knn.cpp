@@ -5,16 +5,11 @@
 #include <algorithm>
 #include <array>
 
+#include "engine/core/isa_clones.h"
+
 namespace dynscope {
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define DYNSCOPE_RANK_CLONES \
-  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define DYNSCOPE_RANK_CLONES
-#endif
-
-DYNSCOPE_RANK_CLONES
+DYNSCOPE_ISA_CLONES
 size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
                      Neighbor* out) {
   n = std::min(n, kSmallSetSize);
@@ -40,7 +35,7 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
   return std::min(count, k);
 }
 
-DYNSCOPE_RANK_CLONES
+DYNSCOPE_ISA_CLONES
 size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
                     Neighbor* out) {
   n = std::min(n, kSmallSetSize);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/core/isa_clones.h"
 #include "engine/model/conv_implementation.h"
 
 namespace dynscope::fused_detail {
@@ -22,21 +23,10 @@ using torch::autograd::tensor_list;
 constexpr int64_t kGrain = 64;
 
 // Every kernel body below is force-inlined into two entry points: one compiled for the baseline
-// instruction set (ConvImplementation::kFusedBaseline) and one cloned for the x86-64 levels v4
-// (AVX-512) and v3 (AVX2+FMA) and the baseline, the clone chosen once at load time from the CPU's
-// features (GCC function multiversioning). Levels, not CPU models: a clone for a model
-// ("arch=skylake-avx512", "arch=haswell") is chosen only on that vendor's model, so every AMD CPU
-// ran the baseline. The inner loops run over the filter width J, which `omp simd` vectorises to J
-// lanes.
+// instruction set (ConvImplementation::kFusedBaseline) and one with DYNSCOPE_ISA_CLONES
+// (engine/core/isa_clones.h: cloned for the x86-64 levels v4 and v3 and the baseline). The inner
+// loops run over the filter width J, which `omp simd` vectorises to J lanes.
 // fused_kernel_isa() reports the clone by the same dispatch on the same two targets.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define DYNSCOPE_ISA_V4 "arch=x86-64-v4"
-#define DYNSCOPE_ISA_V3 "arch=x86-64-v3"
-#define DYNSCOPE_SIMD_CLONES \
-  __attribute__((target_clones(DYNSCOPE_ISA_V4, DYNSCOPE_ISA_V3, "default")))
-#else
-#define DYNSCOPE_SIMD_CLONES
-#endif
 #define DYNSCOPE_KERNEL_BODY __attribute__((always_inline)) inline
 
 inline bool use_simd_clones() {

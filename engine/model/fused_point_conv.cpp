@@ -60,7 +60,7 @@ void aggregate_rows_baseline(const AggregateArgs<T>& a, T* out, int64_t begin, i
 }
 
 template <typename T, int kJ>
-DYNSCOPE_SIMD_CLONES void aggregate_rows_simd(const AggregateArgs<T>& a, T* out, int64_t begin,
+DYNSCOPE_ISA_CLONES void aggregate_rows_simd(const AggregateArgs<T>& a, T* out, int64_t begin,
                                               int64_t end, Width<kJ> width, T* acc) {
   aggregate_rows_body(a, out, begin, end, width, acc);
 }
@@ -144,7 +144,7 @@ void aggregate_grad_rows_baseline(const AggregateArgs<T>& a, const AggregateGrad
 }
 
 template <typename T, int kJ>
-DYNSCOPE_SIMD_CLONES void aggregate_grad_rows_simd(const AggregateArgs<T>& a,
+DYNSCOPE_ISA_CLONES void aggregate_grad_rows_simd(const AggregateArgs<T>& a,
                                                    const AggregateGrads<T>& d, int64_t begin,
                                                    int64_t end, Width<kJ> width, T* gt, T* dx) {
   aggregate_grad_rows_body(a, d, begin, end, width, gt, dx);
@@ -257,7 +257,7 @@ void gather_add_rows_baseline(const T* q, const T* s, const T* r, const int64_t*
 }
 
 template <typename T>
-DYNSCOPE_SIMD_CLONES void gather_add_rows_simd(const T* q, const T* s, const T* r,
+DYNSCOPE_ISA_CLONES void gather_add_rows_simd(const T* q, const T* s, const T* r,
                                                const int64_t* index, T* out, int64_t begin,
                                                int64_t end, int64_t k, int64_t hdim) {
   gather_add_rows_body(q, s, r, index, out, begin, end, k, hdim);
@@ -373,7 +373,7 @@ DYNSCOPE_KERNEL_BODY void layer_norm_relu_body(const float* __restrict x, const 
   }
 }
 
-DYNSCOPE_SIMD_CLONES void layer_norm_relu_simd(const float* x, const float* w, const float* b,
+DYNSCOPE_ISA_CLONES void layer_norm_relu_simd(const float* x, const float* w, const float* b,
                                                float* y, int64_t c, float eps, int64_t begin,
                                                int64_t end) {
   layer_norm_relu_body(x, w, b, y, c, eps, begin, end);
@@ -386,7 +386,7 @@ void layer_norm_relu_baseline(const float* x, const float* w, const float* b, fl
 
 std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
 
-// One version per clone of DYNSCOPE_SIMD_CLONES, dispatched by the same rule.
+// One version per clone of DYNSCOPE_ISA_CLONES, dispatched by the same rule.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 __attribute__((target("default"))) const char* isa_of_this_cpu() { return "baseline"; }
 __attribute__((target(DYNSCOPE_ISA_V3))) const char* isa_of_this_cpu() { return "x86-64-v3"; }

@@ -430,7 +430,7 @@ void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, 
 }
 
 template <class D>
-DYNSCOPE_SIMD_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
+DYNSCOPE_ISA_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
                                               int64_t end, D d, float* scratch) {
   inference_rows(a, out, begin, end, d, scratch);
 }
@@ -840,7 +840,7 @@ void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_
 }
 
 template <class D>
-DYNSCOPE_SIMD_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float* grad,
+DYNSCOPE_ISA_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float* grad,
                                              float* d_feat, float* d_gate, float* dw,
                                              const MlpGradLayout& lay, int64_t begin, int64_t end,
                                              D d, float* scratch, int64_t* edges) {

@@ -7,6 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "engine/core/isa_clones.h"
+
 namespace dynscope {
 namespace {
 
@@ -18,6 +20,27 @@ bool fusable(const torch::Tensor& t) {
 // The key torch::optim::Adam files a parameter's state under.
 std::string state_key(const torch::Tensor& p) {
   return c10::guts::to_string(p.unsafeGetTensorImpl());
+}
+
+struct AdamScalars {
+  float b1, b2, one_minus_b1, one_minus_b2, root_correction2, eps, decay, step_size;
+};
+
+// The update of one parameter's n floats. Compiled with -fno-math-errno (a square root need not
+// set errno, which kept the loop scalar: a sixth of a Physion-scale training step) and
+// -ffp-contract=off (no multiply-add contraction in the clones, so every clone rounds as the
+// baseline and as LibTorch's Adam did: square root, division, products and sums are each
+// rounded once, vectors or not); see CMakeLists.txt.
+DYNSCOPE_ISA_CLONES
+void adam_update(float* __restrict w, const float* __restrict g, float* __restrict m,
+                 float* __restrict v, int64_t n, const AdamScalars& k) {
+  for (int64_t i = 0; i < n; ++i) {
+    const float gi = k.decay != 0.0f ? g[i] + k.decay * w[i] : g[i];
+    m[i] = m[i] * k.b1 + k.one_minus_b1 * gi;
+    v[i] = v[i] * k.b2 + k.one_minus_b2 * gi * gi;
+    const float denom = std::sqrt(v[i]) / k.root_correction2 + k.eps;
+    w[i] += k.step_size * (m[i] / denom);
+  }
 }
 
 }  // namespace
@@ -69,19 +92,10 @@ void adam_step(torch::optim::Adam& optimizer) {
       const auto eps = static_cast<float>(options.eps());
       const auto decay = static_cast<float>(options.weight_decay());
       const auto step_size = static_cast<float>(-options.lr() / correction1);
-      float* __restrict w = p.data_ptr<float>();
-      const float* __restrict g = grad.data_ptr<float>();
-      float* __restrict m = state.exp_avg().data_ptr<float>();
-      float* __restrict v = state.exp_avg_sq().data_ptr<float>();
-      const int64_t n = p.numel();
-#pragma omp simd
-      for (int64_t i = 0; i < n; ++i) {
-        const float gi = decay != 0.0f ? g[i] + decay * w[i] : g[i];
-        m[i] = m[i] * b1 + one_minus_b1 * gi;
-        v[i] = v[i] * b2 + one_minus_b2 * gi * gi;
-        const float denom = std::sqrt(v[i]) / root_correction2 + eps;
-        w[i] += step_size * (m[i] / denom);
-      }
+      const AdamScalars k{b1, b2, one_minus_b1, one_minus_b2, root_correction2, eps, decay,
+                          step_size};
+      adam_update(p.data_ptr<float>(), grad.data_ptr<float>(), state.exp_avg().data_ptr<float>(),
+                  state.exp_avg_sq().data_ptr<float>(), p.numel(), k);
       p.unsafeGetTensorImpl()->bump_version();  // as the in-place op it replaces would
     }
   }

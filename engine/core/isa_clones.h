@@ -1,0 +1,15 @@
+// Instruction-set clones of a hot function: GCC function multiversioning compiles it for the
+// x86-64 levels v4 (AVX-512) and v3 (AVX2+FMA) and for the baseline the build targets (SSE2), and
+// picks the clone once at load time from the CPU's features. Levels, not CPU models: a clone for
+// a model ("arch=skylake-avx512", "arch=haswell") is chosen only on that vendor's model, so every
+// AMD CPU ran the baseline. Other compilers and targets build the plain function.
+#pragma once
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define DYNSCOPE_ISA_V4 "arch=x86-64-v4"
+#define DYNSCOPE_ISA_V3 "arch=x86-64-v3"
+#define DYNSCOPE_ISA_CLONES \
+  __attribute__((target_clones(DYNSCOPE_ISA_V4, DYNSCOPE_ISA_V3, "default")))
+#else
+#define DYNSCOPE_ISA_CLONES
+#endif
