@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -81,6 +82,45 @@ TEST(AdamStepTest, MatchesLibTorchsAdamStepByStep) {
     EXPECT_TRUE(torch::equal(fused[3].detach(), untouched));
     EXPECT_EQ(fused_adam.state().count(c10::guts::to_string(fused[3].unsafeGetTensorImpl())), 0u);
     EXPECT_EQ(fused_adam.state().size(), ref_adam.state().size());
+  }
+}
+
+// The update of a large parameter (the vector loop of the CPU's instruction-set clone, with a
+// tail) is the scalar update written out here, bit for bit: its clones are compiled without
+// multiply-add contraction, and square roots, divisions, products and sums are each rounded once
+// whatever the vector width.
+TEST(AdamStepTest, VectorUpdateEqualsTheScalarFormulaBitForBit) {
+  torch::manual_seed(7);
+  torch::Tensor p = torch::randn({1003}).requires_grad_(true);
+  std::vector<float> w(p.data_ptr<float>(), p.data_ptr<float>() + p.numel());
+  std::vector<float> m(w.size(), 0.0f), v(w.size(), 0.0f);
+  const double lr = 3e-3, beta1 = 0.9, beta2 = 0.999, eps = 1e-8, decay = 0.02;
+  torch::optim::Adam adam({p}, torch::optim::AdamOptions(lr).weight_decay(decay));
+  for (int step = 1; step <= 3; ++step) {
+    p.mutable_grad() = torch::randn({1003}) * static_cast<double>(step);
+    const float* g = p.grad().data_ptr<float>();
+    const double c1 = 1.0 - std::pow(beta1, step), c2 = 1.0 - std::pow(beta2, step);
+    const auto root_c2 = static_cast<float>(std::sqrt(c2));
+    const auto step_size = static_cast<float>(-lr / c1);
+    for (size_t i = 0; i < w.size(); ++i) {
+      volatile float gi = g[i] + static_cast<float>(decay) * w[i];  // no contraction here either
+      volatile float mi = m[i] * static_cast<float>(beta1);
+      m[i] = mi + static_cast<float>(1.0 - beta1) * gi;
+      volatile float vi = v[i] * static_cast<float>(beta2);
+      volatile float g2 = static_cast<float>(1.0 - beta2) * gi;
+      volatile float g2g = g2 * gi;
+      v[i] = vi + g2g;
+      volatile float root = std::sqrt(v[i]);
+      volatile float denom = root / root_c2 + static_cast<float>(eps);
+      volatile float ratio = m[i] / denom;
+      volatile float delta = step_size * ratio;
+      w[i] = w[i] + delta;
+    }
+    adam_step(adam);
+    const float* got = p.data_ptr<float>();
+    for (size_t i = 0; i < w.size(); ++i) {
+      ASSERT_EQ(got[i], w[i]) << "step " << step << " element " << i;
+    }
   }
 }
 
