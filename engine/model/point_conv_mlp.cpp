@@ -10,6 +10,7 @@
 #include "engine/core/error.h"
 #include "engine/model/fused_kernels.h"
 #include "engine/model/fused_point_conv.h"
+#include "engine/model/lanes.h"
 
 namespace dynscope {
 namespace {
@@ -78,115 +79,6 @@ DYNSCOPE_KERNEL_BODY void first_layer(float* __restrict y, const float* __restri
   for (int64_t o = 0; o < n; ++o) {
     const float v = bias[o] + w[3 * o] * r[0] + w[3 * o + 1] * r[1] + w[3 * o + 2] * r[2];
     y[o] = v > 0.0f ? v : 0.0f;
-  }
-}
-
-// Vectors of 16 and 8 floats: one AVX-512 or AVX register in the v4 clone, two or more in the
-// others (GCC vector extensions, so every clone compiles the same source).
-typedef float Lanes16 __attribute__((vector_size(64)));
-typedef float Lanes8 __attribute__((vector_size(32)));
-
-// Vectors travel by reference: passed or returned by value they would change the ABI between the
-// clones.
-template <class V>
-DYNSCOPE_KERNEL_BODY void load_lanes(V& v, const float* p) {
-  std::memcpy(&v, p, sizeof v);
-}
-
-template <class V>
-DYNSCOPE_KERNEL_BODY void store_lanes(float* p, const V& v) {
-  std::memcpy(p, &v, sizeof v);
-}
-
-template <class V>
-DYNSCOPE_KERNEL_BODY void relu_lanes(V& v) {
-  v = v > 0.0f ? v : V{};
-}
-
-// The sum of a vector's lanes, by halves.
-DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes16& v) {
-  typedef float Lanes4 __attribute__((vector_size(16)));
-  Lanes8 lo, hi;
-  std::memcpy(&lo, &v, sizeof lo);
-  std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof lo, sizeof hi);
-  const Lanes8 s8 = lo + hi;
-  Lanes4 a, b;
-  std::memcpy(&a, &s8, sizeof a);
-  std::memcpy(&b, reinterpret_cast<const char*>(&s8) + sizeof a, sizeof b);
-  const Lanes4 s4 = a + b;
-  return (s4[0] + s4[1]) + (s4[2] + s4[3]);
-}
-
-// y[o] = Σ_i w[o·n + i] · x[i] for o < n_out (a linear's weight `[n_out][n]` as LibTorch stores
-// it): four outputs at a time, each a vector of partial sums over 16 inputs at a time, summed
-// across its lanes at the end.
-DYNSCOPE_KERNEL_BODY void apply_linear(float* __restrict y, const float* __restrict x, int64_t n,
-                                       const float* __restrict w, int64_t n_out) {
-  const int64_t n16 = n / 16 * 16;
-  int64_t o = 0;
-  for (; o + 4 <= n_out; o += 4) {
-    Lanes16 s[4] = {};
-    for (int64_t i = 0; i < n16; i += 16) {
-      Lanes16 xv;
-      load_lanes(xv, x + i);
-#pragma GCC unroll 4
-      for (int u = 0; u < 4; ++u) {
-        Lanes16 wv;
-        load_lanes(wv, w + (o + u) * n + i);
-        s[u] += xv * wv;
-      }
-    }
-    for (int u = 0; u < 4; ++u) {
-      float sum = lane_sum(s[u]);
-      for (int64_t i = n16; i < n; ++i) sum += w[(o + u) * n + i] * x[i];
-      y[o + u] = sum;
-    }
-  }
-  for (; o < n_out; ++o) {
-    Lanes16 s = {};
-    for (int64_t i = 0; i < n16; i += 16) {
-      Lanes16 xv, wv;
-      load_lanes(xv, x + i);
-      load_lanes(wv, w + o * n + i);
-      s += xv * wv;
-    }
-    float sum = lane_sum(s);
-    for (int64_t i = n16; i < n; ++i) sum += w[o * n + i] * x[i];
-    y[o] = sum;
-  }
-}
-
-// apply_linear for four queries at once: x holds their rows (`[4][n]`), y gets `[4][n_out]`. Each
-// weight vector loaded serves the four rows, so the products run at the vector units' rate rather
-// than the loads'.
-DYNSCOPE_KERNEL_BODY void apply_linear4(float* __restrict y, const float* __restrict x, int64_t n,
-                                        const float* __restrict w, int64_t n_out) {
-  const int64_t n16 = n / 16 * 16;
-  int64_t o = 0;
-  for (; o + 4 <= n_out; o += 4) {
-    Lanes16 s[4][4] = {};  // [query][output]
-    for (int64_t i = 0; i < n16; i += 16) {
-      Lanes16 xv[4];
-#pragma GCC unroll 4
-      for (int r = 0; r < 4; ++r) load_lanes(xv[r], x + r * n + i);
-#pragma GCC unroll 4
-      for (int u = 0; u < 4; ++u) {
-        Lanes16 wv;
-        load_lanes(wv, w + (o + u) * n + i);
-#pragma GCC unroll 4
-        for (int r = 0; r < 4; ++r) s[r][u] += xv[r] * wv;
-      }
-    }
-    for (int r = 0; r < 4; ++r) {
-      for (int u = 0; u < 4; ++u) {
-        float sum = lane_sum(s[r][u]);
-        for (int64_t i = n16; i < n; ++i) sum += w[(o + u) * n + i] * x[r * n + i];
-        y[r * n_out + o + u] = sum;
-      }
-    }
-  }
-  for (int r = 0; r < 4; ++r) {
-    if (o < n_out) apply_linear(y + r * n_out + o, x + r * n, n, w + o * n, n_out - o);
   }
 }
 
@@ -268,15 +160,6 @@ DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool
     load_lanes(w.c2, a.c2);
   }
   return w;
-}
-
-// Vector values of a small array in memory, read back one float at a time: the compiler must load
-// them from memory (a broadcast load per use) instead of extracting each lane from the register,
-// which costs a shuffle or two per lane.
-template <class V>
-DYNSCOPE_KERNEL_BODY void spill_lanes(float* to, const V& v) {
-  store_lanes(to, v);
-  asm("" : : "r"(to) : "memory");
 }
 
 // One neighbour's WeightNet at relative position r: h = W3·h2 + b3 with h2 = relu(W2·h1 + b2) and
@@ -431,7 +314,7 @@ void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, 
 
 template <class D>
 DYNSCOPE_ISA_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
-                                              int64_t end, D d, float* scratch) {
+                                             int64_t end, D d, float* scratch) {
   inference_rows(a, out, begin, end, d, scratch);
 }
 
@@ -841,9 +724,9 @@ void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_
 
 template <class D>
 DYNSCOPE_ISA_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float* grad,
-                                             float* d_feat, float* d_gate, float* dw,
-                                             const MlpGradLayout& lay, int64_t begin, int64_t end,
-                                             D d, float* scratch, int64_t* edges) {
+                                            float* d_feat, float* d_gate, float* dw,
+                                            const MlpGradLayout& lay, int64_t begin, int64_t end,
+                                            D d, float* scratch, int64_t* edges) {
   mlp_grad_rows(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
 }
 
