@@ -1,13 +1,14 @@
-// KdIndex: a nanoflann kd-tree in double with exact, index-ordered result sets.
+// KdIndex: a kd-tree in double with tight cell boxes and exact, index-ordered result sets.
 #include "engine/geometry/kdtree_index.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <nanoflann.hpp>
+#include <omp.h>
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
 #include "engine/geometry/small_set_knn.h"
 
 namespace dynscope {
@@ -15,8 +16,8 @@ namespace {
 
 // Squared distances of coordinates up to this size stay far below the double range.
 constexpr double kMaxCoordinate = 1e18;
-// The tree's pruning bounds are sums of a few rounded squares updated once per tree level, so
-// they are off by at most ~1e-14 relative; widening the bound by 1e-9 can only visit more cells.
+// Pruning compares bounds that never exceed a computed point distance; widening the k-th distance
+// by 1e-9 relative on top can only visit more cells, and keeps ties at the k-th distance offered.
 constexpr double kBoundSlack = 1e-9;
 // Points per leaf: of 6, 12 and 24, 24 was fastest for K = 16 on object surfaces in
 // geometry_bench. Sets of up to kSmallSetSize points have no tree (small_set_knn answers them).
@@ -25,6 +26,10 @@ constexpr size_t kLeafSize = 24;
 static_assert(kLeafSize <= 32);
 // knn_self ranks a first leaf with rank_nearest.
 static_assert(kLeafSize <= kSmallSetSize);
+// Trees of at least this many points build their top kParallelBuildLevels levels first and the
+// 2^kParallelBuildLevels subtrees below them on the compute threads.
+constexpr uint32_t kParallelBuildPoints = 16384;
+constexpr int kParallelBuildLevels = 2;
 
 // True when (sq_dist, index) orders before `b`: nearer, or as near with a lower index.
 bool neighbor_before(double sq_dist, int32_t index, const Neighbor& b) {
@@ -87,21 +92,20 @@ void scan(const Points& points, const Vec3& query, size_t k, double max_sq_dist,
   out.resize(keep);
 }
 
-// nanoflann's result-set interface over a NearestSet, limited to squared distance <= sq_limit.
+// The k nearest offered points with squared distance <= sq_limit, for Tree::descend.
 class KnnResult {
  public:
   KnnResult(const int32_t* original, Neighbor* buffer, size_t k, double sq_limit)
       : original_(original), set_(buffer, k), sq_limit_(sq_limit), bound_(widen(sq_limit)) {}
 
   size_t size() const { return set_.size(); }
-  bool full() const { return set_.full(); }
-  double worstDist() const { return bound_; }
+  // A subtree whose distance bound exceeds this has nothing to offer.
+  double bound() const { return bound_; }
 
-  bool addPoint(double sq_dist, uint32_t slot) {
+  void add(double sq_dist, uint32_t slot) {
     if (sq_dist <= sq_limit_ && set_.add(sq_dist, original_[slot]) && set_.full()) {
       bound_ = widen(set_.kth());
     }
-    return true;
   }
 
  private:
@@ -111,19 +115,16 @@ class KnnResult {
   double bound_;
 };
 
-// Every candidate with squared distance <= a limit, unsorted.
+// Every offered point with squared distance <= sq_limit, unsorted.
 class RadiusResult {
  public:
   RadiusResult(const int32_t* original, std::vector<Neighbor>& out, double sq_limit)
       : original_(original), out_(out), sq_limit_(sq_limit), bound_(widen(sq_limit)) {}
 
-  size_t size() const { return out_.size(); }
-  bool full() const { return true; }
-  double worstDist() const { return bound_; }
+  double bound() const { return bound_; }
 
-  bool addPoint(double sq_dist, uint32_t slot) {
+  void add(double sq_dist, uint32_t slot) {
     if (sq_dist <= sq_limit_) out_.push_back({sq_dist, original_[slot]});
-    return true;
   }
 
  private:
@@ -133,63 +134,70 @@ class RadiusResult {
   double bound_;
 };
 
+// Distance along one axis from `v` to the interval [lo, hi]: never above |v - p| as rounded for
+// any p in the interval (subtraction rounds monotonically).
+double axis_gap(double v, double lo, double hi) {
+  return std::max(0.0, std::max(lo - v, v - hi));
+}
+
+// A point set stored in leaf order during the build: coordinates and input index together, so
+// partitioning moves one contiguous record.
+struct Slot {
+  std::array<double, 3> p;
+  int32_t original;
+};
+
 }  // namespace
 
 struct KdIndex::Tree {
-  // nanoflann's view of `xyz`: point i is xyz[3i .. 3i+2].
-  struct Source {
-    const Tree* tree;
-    size_t kdtree_get_point_count() const { return tree->original.size(); }
-    double kdtree_get_pt(uint32_t i, size_t dim) const { return tree->xyz[3 * i + dim]; }
-    template <class Box>
-    bool kdtree_get_bbox(Box&) const {
-      return false;
-    }
-  };
-
-  // squared_distance() itself, so tree distances round exactly as every other caller's.
-  struct Metric {
-    using ElementType = double;
-    using DistanceType = double;
-    explicit Metric(const Source& s) : source(s) {}
-    double evalMetric(const double* a, uint32_t i, size_t) const {
-      const double* p = &source.tree->xyz[3 * i];
-      return squared_distance(Vec3(a[0], a[1], a[2]), Vec3(p[0], p[1], p[2]));
-    }
-    template <typename U, typename V>
-    double accum_dist(U a, V b, size_t) const {
-      return (a - b) * (a - b);
-    }
-    const Source& source;
-  };
-
-  using Index = nanoflann::KDTreeSingleIndexAdaptor<Metric, Source, 3, uint32_t>;
-
-  explicit Tree(const Points& points)
-      : xyz(points.data(), points.data() + points.size()),
-        original(static_cast<size_t>(points.rows())),
-        source{this},
-        index(3, source, nanoflann::KDTreeSingleIndexAdaptorParams(kLeafSize)) {
-    // Store the points in leaf order so that a leaf's points are contiguous in memory: the tree
-    // addresses points through vAcc, which becomes the identity over the permuted storage.
-    std::vector<double> sorted(xyz.size());
-    for (size_t slot = 0; slot < index.vAcc.size(); ++slot) {
-      const uint32_t i = index.vAcc[slot];
-      original[slot] = static_cast<int32_t>(i);
-      std::copy_n(&xyz[3 * i], 3, &sorted[3 * slot]);
-      index.vAcc[slot] = static_cast<uint32_t>(slot);
-    }
-    xyz.swap(sorted);
-    cells.reserve(2 * original.size() / kLeafSize + 2);
-    flatten(index.root_node);
-  }
-
-  // A node of the tree with the tight box of its points (storage slots begin .. end - 1).
+  // A node of the tree with the tight box of its points (storage slots begin .. end - 1). An inner
+  // node's children split its points along axis `axis`: every coordinate of the first is at or
+  // below every coordinate of the second on that axis.
   struct Cell {
     std::array<double, 3> lo, hi;
     std::array<int32_t, 2> child;  // {-1, -1} for a leaf
     uint32_t begin, end;
+    int32_t axis;
   };
+
+  explicit Tree(const Points& points) {
+    const auto n = static_cast<uint32_t>(points.rows());
+    xyz.resize(3 * static_cast<size_t>(n));
+    original.resize(n);
+    Buffers buffers{std::vector<Slot>(n), std::vector<Slot>(n)};
+    for (uint32_t i = 0; i < n; ++i) {
+      buffers.slots[0][i] = {{points(i, 0), points(i, 1), points(i, 2)}, static_cast<int32_t>(i)};
+    }
+    cells.reserve(2 * static_cast<size_t>(n) / (kLeafSize / 2) + 2);
+    // The top levels are split here; below them the parts are built on the compute threads, each
+    // into its own list, and spliced in. The parts are the same for every thread count, and so is
+    // the tree (only the order of the cells in memory differs from a serial build).
+    const int levels = n >= kParallelBuildPoints ? kParallelBuildLevels : 0;
+    std::vector<Part> parts;
+    build_top(buffers, 0, 0, n, levels, parts);
+    std::vector<std::vector<Cell>> built(parts.size());
+    const int threads = parts.size() > 1 && !omp_in_parallel() ? compute_threads() : 1;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (threads > 1)
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const Part& part = parts[i];
+      built[i].reserve(2 * static_cast<size_t>(part.end - part.begin) / (kLeafSize / 2) + 2);
+      build(buffers, part.from, part.begin, part.end, built[i]);
+    }
+    for (size_t i = 0; i < parts.size(); ++i) splice(parts[i].cell, built[i]);
+    collect_leaves(0);
+    nodes.resize(cells.size());
+    for (size_t i = 0; i < cells.size(); ++i) {
+      const Cell& c = cells[i];
+      if (c.child[0] < 0) {
+        nodes[i] = {0.0, 0.0, static_cast<int32_t>(c.begin), static_cast<int32_t>(c.end), -1};
+      } else {
+        const auto axis = static_cast<size_t>(c.axis);
+        nodes[i] = {cells[static_cast<size_t>(c.child[0])].hi[axis],
+                    cells[static_cast<size_t>(c.child[1])].lo[axis], c.child[0], c.child[1],
+                    c.axis};
+      }
+    }
+  }
 
   // Squared distance between two boxes. Rounding is monotone and the summation order is
   // squared_distance()'s, so it is never above the computed distance of a point of one box to a
@@ -207,55 +215,204 @@ struct KdIndex::Tree {
   static double point_box_distance(const double* p, const Cell& b) {
     double s = 0.0;
     for (int d = 0; d < 3; ++d) {
-      const double gap = std::max(0.0, std::max(b.lo[d] - p[d], p[d] - b.hi[d]));
+      const double gap = axis_gap(p[d], b.lo[d], b.hi[d]);
       s += gap * gap;
     }
     return s;
   }
 
-  // Copies the subtree of `node` into `cells` (children after their parent) and returns its cell.
-  int32_t flatten(const Index::Node* node) {
-    const auto id = static_cast<int32_t>(cells.size());
-    cells.emplace_back();
-    if (node->child1 == nullptr && node->child2 == nullptr) {
-      Cell c{};
-      c.child = {-1, -1};
-      c.begin = static_cast<uint32_t>(node->node_type.lr.left);
-      c.end = static_cast<uint32_t>(node->node_type.lr.right);
-      c.lo.fill(std::numeric_limits<double>::infinity());
-      c.hi.fill(-std::numeric_limits<double>::infinity());
-      for (uint32_t slot = c.begin; slot < c.end; ++slot) {
-        for (int d = 0; d < 3; ++d) {
-          c.lo[d] = std::min(c.lo[d], xyz[3 * slot + d]);
-          c.hi[d] = std::max(c.hi[d], xyz[3 * slot + d]);
-        }
+  // What a search descends through: one cell in 32 bytes, the two planes of its split (the
+  // largest coordinate of the first child and the smallest of the second on the split axis) or,
+  // for a leaf, its slots.
+  struct Node {
+    double below, above;  // split planes (inner node)
+    int32_t a, b;         // children (inner node) or slots a .. b - 1 (leaf)
+    int32_t axis;         // split axis, -1 for a leaf
+  };
+
+  // Offers `result` every point of the tree within its bound of `q`. `gap2[d]` is the squared
+  // distance along axis d from q to an interval holding every point of the node, so their sum (in
+  // squared_distance()'s order, rounding monotonically) is never above a point's computed
+  // distance: a subtree is skipped only when none of its points can be offered. The child on
+  // the query's side of the split is searched first with the parent's bound (valid for it too),
+  // the other with its gap to the split plane on the split axis, if still in reach.
+  template <class Result>
+  void descend(int32_t id, const double* q, std::array<double, 3>& gap2, Result& result) const {
+    const Node& node = nodes[static_cast<size_t>(id)];
+    if (node.axis < 0) {
+      for (auto slot = static_cast<uint32_t>(node.a); slot < static_cast<uint32_t>(node.b);
+           ++slot) {
+        const double* p = &xyz[3 * static_cast<size_t>(slot)];
+        const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+        const double d = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+        if (d <= result.bound()) result.add(d, slot);
       }
-      cells[static_cast<size_t>(id)] = c;
-      leaves.push_back(id);
+      return;
+    }
+    const auto axis = static_cast<size_t>(node.axis);
+    const double v = q[axis];
+    const bool a_first = (v - node.below) + (v - node.above) < 0.0;
+    descend(a_first ? node.a : node.b, q, gap2, result);
+    const double far = std::max(0.0, a_first ? node.above - v : v - node.below);
+    const double saved = gap2[axis];
+    gap2[axis] = far * far;
+    if (gap2[0] + gap2[1] + gap2[2] <= result.bound()) {
+      descend(a_first ? node.b : node.a, q, gap2, result);
+    }
+    gap2[axis] = saved;
+  }
+
+  // Searches the whole tree for `q`.
+  template <class Result>
+  void search(const double* q, Result& result) const {
+    std::array<double, 3> gap2{};
+    for (int d = 0; d < 3; ++d) {
+      const double g = axis_gap(q[d], cells[0].lo[d], cells[0].hi[d]);
+      gap2[static_cast<size_t>(d)] = g * g;
+    }
+    if (gap2[0] + gap2[1] + gap2[2] <= result.bound()) descend(0, q, gap2, result);
+  }
+
+  std::vector<double> xyz;        // the points in leaf order (x, y, z per storage slot)
+  std::vector<int32_t> original;  // input index of the point in each storage slot
+  std::vector<Cell> cells;        // cells[0] is the root
+  std::vector<Node> nodes;        // the cells as the searches read them (same indices)
+  std::vector<int32_t> leaves;    // the leaf cells, in storage order
+
+ private:
+  // The points during the build, in two buffers: a node reads its slots from one and writes them
+  // split into the other, where its children read them.
+  struct Buffers {
+    std::array<std::vector<Slot>, 2> slots;
+  };
+
+  // Below the top levels: a part of the points built into a list of its own.
+  struct Part {
+    int32_t cell;  // the cell the part's root replaces
+    int from;      // the buffer holding the part's points
+    uint32_t begin, end;
+  };
+
+  // The tight box of slots begin .. end - 1 (at least one).
+  static Cell bounds(const Slot* slots, uint32_t begin, uint32_t end) {
+    // Six independent running extrema in registers.
+    double lx = slots[begin].p[0], ly = slots[begin].p[1], lz = slots[begin].p[2];
+    double hx = lx, hy = ly, hz = lz;
+    for (uint32_t i = begin + 1; i < end; ++i) {
+      const std::array<double, 3>& p = slots[i].p;
+      lx = std::min(lx, p[0]);
+      ly = std::min(ly, p[1]);
+      lz = std::min(lz, p[2]);
+      hx = std::max(hx, p[0]);
+      hy = std::max(hy, p[1]);
+      hz = std::max(hz, p[2]);
+    }
+    Cell c{};
+    c.lo = {lx, ly, lz};
+    c.hi = {hx, hy, hz};
+    c.begin = begin;
+    c.end = end;
+    c.child = {-1, -1};
+    c.axis = 0;
+    return c;
+  }
+
+  // Copies the slots of `c` from `from` into `to` split across the middle of its box's widest
+  // axis (points on the plane go first), without branches; a split leaving under a quarter on
+  // one side is replaced by the median, so the depth stays logarithmic for any input. Sets c.axis
+  // and returns the first slot of the second half.
+  static uint32_t split(const Slot* from, Slot* to, Cell& c) {
+    int axis = 0;
+    for (int d = 1; d < 3; ++d) {
+      if (c.hi[d] - c.lo[d] > c.hi[axis] - c.lo[axis]) axis = d;
+    }
+    c.axis = axis;
+    const double cut = 0.5 * c.lo[axis] + 0.5 * c.hi[axis];
+    // Each slot is written at both ends of the gap; only the end its side grows keeps it.
+    int64_t first = c.begin, last = static_cast<int64_t>(c.end) - 1;
+    for (uint32_t i = c.begin; i < c.end; ++i) {
+      const Slot s = from[i];
+      to[first] = s;
+      to[last] = s;
+      const bool below = s.p[axis] <= cut;
+      first += below;
+      last -= !below;
+    }
+    const uint32_t count = c.end - c.begin, half = count / 2;
+    auto at = static_cast<uint32_t>(first - c.begin);
+    if (at < count / 4 || at > count - count / 4) {
+      Slot* part = to + c.begin;
+      std::nth_element(part, part + half, part + count,
+                       [&](const Slot& x, const Slot& y) { return x.p[axis] < y.p[axis]; });
+      at = half;
+    }
+    return c.begin + at;
+  }
+
+  // Builds the subtree over slots begin .. end - 1 of buffer `from` into `out` and returns its
+  // cell's index there; each leaf stores its points in the tree's storage slots.
+  int32_t build(Buffers& buffers, int from, uint32_t begin, uint32_t end, std::vector<Cell>& out) {
+    const auto id = static_cast<int32_t>(out.size());
+    const Slot* slots = buffers.slots[static_cast<size_t>(from)].data();
+    Cell c = bounds(slots, begin, end);
+    out.push_back(c);
+    if (end - begin <= kLeafSize) {
+      for (uint32_t i = begin; i < end; ++i) {
+        std::copy_n(slots[i].p.data(), 3, &xyz[3 * static_cast<size_t>(i)]);
+        original[i] = slots[i].original;
+      }
       return id;
     }
-    const int32_t a = flatten(node->child1);
-    const int32_t b = flatten(node->child2);
-    const Cell& ca = cells[static_cast<size_t>(a)];
-    const Cell& cb = cells[static_cast<size_t>(b)];
-    Cell c{};
-    c.child = {a, b};
-    c.begin = std::min(ca.begin, cb.begin);
-    c.end = std::max(ca.end, cb.end);
-    for (int d = 0; d < 3; ++d) {
-      c.lo[d] = std::min(ca.lo[d], cb.lo[d]);
-      c.hi[d] = std::max(ca.hi[d], cb.hi[d]);
+    const uint32_t mid = split(slots, buffers.slots[static_cast<size_t>(1 - from)].data(), c);
+    c.child[0] = build(buffers, 1 - from, begin, mid, out);
+    c.child[1] = build(buffers, 1 - from, mid, end, out);
+    out[static_cast<size_t>(id)] = c;
+    return id;
+  }
+
+  // The top `levels` levels of the tree over slots begin .. end - 1 of buffer `from`, in
+  // `cells`; the subtrees below them are left to `parts` (a placeholder cell each).
+  int32_t build_top(Buffers& buffers, int from, uint32_t begin, uint32_t end, int levels,
+                    std::vector<Part>& parts) {
+    const auto id = static_cast<int32_t>(cells.size());
+    if (levels == 0 || end - begin <= kLeafSize) {
+      cells.emplace_back();
+      parts.push_back({id, from, begin, end});
+      return id;
     }
+    Cell c = bounds(buffers.slots[static_cast<size_t>(from)].data(), begin, end);
+    cells.push_back(c);
+    const uint32_t mid = split(buffers.slots[static_cast<size_t>(from)].data(),
+                               buffers.slots[static_cast<size_t>(1 - from)].data(), c);
+    c.child[0] = build_top(buffers, 1 - from, begin, mid, levels - 1, parts);
+    c.child[1] = build_top(buffers, 1 - from, mid, end, levels - 1, parts);
     cells[static_cast<size_t>(id)] = c;
     return id;
   }
 
-  std::vector<double> xyz;
-  std::vector<int32_t> original;  // input index of the point in each storage slot
-  Source source;
-  Index index;
-  std::vector<Cell> cells;      // cells[0] is the root
-  std::vector<int32_t> leaves;  // the leaf cells
+  // Puts a part's cells in place: its root into the placeholder `at`, the rest after the cells.
+  void splice(int32_t at, const std::vector<Cell>& part) {
+    const auto base = static_cast<int32_t>(cells.size()) - 1;
+    auto relabel = [&](Cell c) {
+      for (int32_t& child : c.child) {
+        if (child >= 0) child += base;
+      }
+      return c;
+    };
+    cells[static_cast<size_t>(at)] = relabel(part[0]);
+    for (size_t j = 1; j < part.size(); ++j) cells.push_back(relabel(part[j]));
+  }
+
+  // Lists the leaves under `id` in storage order.
+  void collect_leaves(int32_t id) {
+    const Cell& c = cells[static_cast<size_t>(id)];
+    if (c.child[0] < 0) {
+      leaves.push_back(id);
+      return;
+    }
+    collect_leaves(c.child[0]);
+    collect_leaves(c.child[1]);
+  }
 };
 
 KdIndex::KdIndex(const Points& points, const char* what) : points_(points) {
@@ -289,7 +446,7 @@ void KdIndex::knn(const Vec3& query, int k, std::vector<Neighbor>& out, double m
     return;
   }
   KnnResult result(tree_->original.data(), out.data(), wanted, max_sq_dist);
-  tree_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  tree_->search(query.data(), result);
   out.resize(result.size());
 }
 
@@ -303,7 +460,7 @@ void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& ou
     return;
   }
   RadiusResult result(tree_->original.data(), out, sq_limit);
-  tree_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  tree_->search(query.data(), result);
   std::sort(out.begin(), out.end(),
             [](const Neighbor& a, const Neighbor& b) { return neighbor_less(a, b); });
 }

@@ -24,11 +24,14 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
-/// Kd-tree (nanoflann) over `[N,3]` points whose answers equal a brute-force search in double: the
-/// tree works in double with squared_distance() itself and widens its pruning bound by far more
-/// than its rounding error, so no candidate at or below the answer's distance is ever skipped.
-/// Results are sorted by (squared distance, index), so ties resolve to the lowest index. Const
-/// queries may run concurrently from several threads.
+/// Kd-tree over `[N,3]` points whose answers equal a brute-force search in double: distances are
+/// squared_distance()'s, and a cell is skipped only when a bound that never exceeds any of its
+/// points' computed distances is beyond the answer's, so no candidate at or below the answer's
+/// distance is ever skipped. Cells split the middle of their tight box's widest axis (the median
+/// when that leaves under a quarter on one side); trees of 16k points and more are built on the
+/// compute threads, into the same tree for every thread count. Results are sorted by (squared
+/// distance, index), so ties resolve to the lowest index. Const queries may run concurrently
+/// from several threads.
 class KdIndex {
  public:
   /// Copies `points` (may have zero rows). Throws ValueError(`what`) if a coordinate is not

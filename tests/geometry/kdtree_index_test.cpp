@@ -10,6 +10,7 @@
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
+#include "engine/core/threads.h"
 
 namespace dynscope {
 namespace {
@@ -166,6 +167,80 @@ TEST(KdIndexTest, SelfQueriesEqualOneSearchPerPoint) {
     index.knn_self(0, 0, scratch, count_calls);
     index.knn_self(index.self_groups(), 4, scratch, count_calls);
     EXPECT_EQ(calls, 0);
+  }
+}
+
+TEST(KdIndexTest, TreesBuiltOnSeveralThreadsAreExactAndAlike) {
+  // 20,000 points (trees from 16k points build their top levels first and the parts below them
+  // on the compute threads): three spheres' surfaces, one far from the origin, and 2 % exact
+  // duplicates. Built on one thread and on two, every answer must be the same and brute force's.
+  Rng rng(44);
+  const Vec3 centres[] = {Vec3(0, 0, 0), Vec3(0.25, 0.1, 0), Vec3(3e4, -1e4, 5e3)};
+  Points points(20000, 3);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    if (i >= 100 && i % 50 == 0) {
+      points.row(i) = points.row(rng.uniform_int(0, static_cast<int>(i) - 1));
+      continue;
+    }
+    const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+    points.row(i) = (0.2 * v.normalized() + centres[i % 3]).transpose();
+  }
+  set_compute_threads(1);
+  const KdIndex one(points);
+  set_compute_threads(2);
+  const KdIndex two(points);
+  const std::vector<std::vector<Neighbor>> answers_one = self_answers(one, 16);
+  const std::vector<std::vector<Neighbor>> answers_two = self_answers(two, 16);
+  set_compute_threads(0);
+  ASSERT_EQ(one.self_groups(), two.self_groups());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    SCOPED_TRACE("point " + std::to_string(i));
+    expect_same(answers_two[static_cast<size_t>(i)], answers_one[static_cast<size_t>(i)]);
+    if (i % 97 == 0) {
+      const std::vector<Neighbor> all = brute_force(points, points.row(i).transpose());
+      expect_same(answers_one[static_cast<size_t>(i)],
+                  std::vector<Neighbor>(all.begin(), all.begin() + 16));
+    }
+    if (HasFatalFailure()) return;
+  }
+  std::vector<Neighbor> found;
+  for (int t = 0; t < 120; ++t) {
+    const Vec3 v = Vec3(rng.normal(), rng.normal(), rng.normal()).normalized();
+    const Vec3 q = centres[t % 3] + rng.uniform(0.0, 0.3) * v;
+    const std::vector<Neighbor> all = brute_force(points, q);
+    for (const KdIndex* index : {&one, &two}) {
+      index->knn(q, 16, found);
+      expect_same(found, std::vector<Neighbor>(all.begin(), all.begin() + 16));
+      index->knn(q, 16, found, 0.01);
+      expect_same(found, nearest_within(all, 16, 0.01));
+      index->radius(q, 0.05, found);
+      expect_same(found, nearest_within(all, all.size(), 0.05 * 0.05));
+    }
+  }
+}
+
+TEST(KdIndexTest, GeometricallySpacedPointsEqualBruteForce) {
+  // Coordinates 2^-i leave a split across the middle of a box with one point on one side at
+  // every level, so the median split takes over at every level; with duplicates, points on
+  // every split plane, and a second axis of small steps.
+  Points points(3000, 3);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    points.row(i) << std::ldexp(1.0, -static_cast<int>(i % 1000)), 1e-3 * static_cast<double>(i % 7),
+        0.0;
+  }
+  const KdIndex index(points);
+  const std::vector<std::vector<Neighbor>> answers = self_answers(index, 16);
+  std::vector<Neighbor> found;
+  for (Eigen::Index i = 0; i < points.rows(); i += 37) {
+    const std::vector<Neighbor> all = brute_force(points, points.row(i).transpose());
+    SCOPED_TRACE("point " + std::to_string(i));
+    expect_same(answers[static_cast<size_t>(i)],
+                std::vector<Neighbor>(all.begin(), all.begin() + 16));
+    index.knn(points.row(i).transpose(), 16, found);
+    expect_same(found, std::vector<Neighbor>(all.begin(), all.begin() + 16));
+    index.radius(points.row(i).transpose(), 1e-3, found);
+    expect_same(found, nearest_within(all, all.size(), 1e-6));
+    if (HasFatalFailure()) return;
   }
 }
 
