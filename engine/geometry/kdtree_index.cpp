@@ -357,6 +357,10 @@ struct KdIndex::Tree {
     Cell c = bounds(slots, begin, end);
     out.push_back(c);
     if (end - begin <= kLeafSize) {
+      // A leaf's points in input order (knn_self's ranking of a leaf breaks ties by position).
+      Slot* leaf = buffers.slots[static_cast<size_t>(from)].data();
+      std::sort(leaf + begin, leaf + end,
+                [](const Slot& x, const Slot& y) { return x.original < y.original; });
       for (uint32_t i = begin; i < end; ++i) {
         std::copy_n(slots[i].p.data(), 3, &xyz[3 * static_cast<size_t>(i)]);
         original[i] = slots[i].original;

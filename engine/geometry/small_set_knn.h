@@ -25,7 +25,8 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
 /// Writes to `out` the min(k, count) of `n` <= kSmallSetSize candidates (squared distance `d[j]`,
 /// index `index[j]`) among the `count` with d[j] <= `max_sq_dist`, sorted by (distance, index),
 /// and returns how many it wrote: the ranking small_set_knn() uses, for candidates whose distances
-/// are already computed (a kd-tree leaf's). Indices must be distinct.
+/// are already computed (a kd-tree leaf's). Indices must ascend (index[j] < index[j + 1]), so
+/// that ties resolve by position as in small_set_knn().
 size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
                     Neighbor* out);
 
