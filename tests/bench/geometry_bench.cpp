@@ -1,4 +1,4 @@
-// Geometry benchmarks: exact kNN (nanoflann in double, parallel) beside the PCL formulation it
+// Geometry benchmarks: exact kNN (our kd-tree in double, parallel) beside the PCL formulation it
 // replaced, hierarchy building, grid downsampling, and brute-force baselines.
 //
 // Scene: 10 sphere surfaces (radius 0.5, 1.05 apart, so neighbouring objects are 0.05 apart)
