@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <omp.h>
 #include <string>
 
@@ -140,8 +141,8 @@ double axis_gap(double v, double lo, double hi) {
   return std::max(0.0, std::max(lo - v, v - hi));
 }
 
-// A point set stored in leaf order during the build: coordinates and input index together, so
-// partitioning moves one contiguous record.
+// A point during the build: coordinates and input index together, so splitting a cell moves one
+// contiguous record.
 struct Slot {
   std::array<double, 3> p;
   int32_t original;
@@ -176,12 +177,20 @@ struct KdIndex::Tree {
     std::vector<Part> parts;
     build_top(buffers, 0, 0, n, levels, parts);
     std::vector<std::vector<Cell>> built(parts.size());
+    std::vector<std::exception_ptr> failed(parts.size());  // rethrown after the loop
     const int threads = parts.size() > 1 && !omp_in_parallel() ? compute_threads() : 1;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (threads > 1)
     for (size_t i = 0; i < parts.size(); ++i) {
-      const Part& part = parts[i];
-      built[i].reserve(2 * static_cast<size_t>(part.end - part.begin) / (kLeafSize / 2) + 2);
-      build(buffers, part.from, part.begin, part.end, built[i]);
+      try {
+        const Part& part = parts[i];
+        built[i].reserve(2 * static_cast<size_t>(part.end - part.begin) / (kLeafSize / 2) + 2);
+        build(buffers, part.from, part.begin, part.end, built[i]);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    }
+    for (const std::exception_ptr& e : failed) {
+      if (e) std::rethrow_exception(e);
     }
     for (size_t i = 0; i < parts.size(); ++i) splice(parts[i].cell, built[i]);
     collect_leaves(0);
