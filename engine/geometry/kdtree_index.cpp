@@ -71,8 +71,8 @@ class NearestSet {
   size_t count_ = 0;
 };
 
-// A bound strictly above `sq_dist` (also for 0) and above any rounding error of the tree's
-// cell distances, so candidates at exactly `sq_dist` (ties) are still offered to the result set.
+// A bound strictly above `sq_dist` (also for 0), so candidates at exactly `sq_dist` (ties) are
+// still offered to the result set.
 double widen(double sq_dist) {
   return sq_dist + sq_dist * kBoundSlack + std::numeric_limits<double>::denorm_min();
 }
@@ -175,7 +175,7 @@ struct KdIndex::Tree {
     // the tree (only the order of the cells in memory differs from a serial build).
     const int levels = n >= kParallelBuildPoints ? kParallelBuildLevels : 0;
     std::vector<Part> parts;
-    build_top(buffers, 0, 0, n, levels, parts);
+    build(buffers, 0, 0, n, cells, levels, &parts);
     std::vector<std::vector<Cell>> built(parts.size());
     std::vector<std::exception_ptr> failed(parts.size());  // rethrown after the loop
     const int threads = parts.size() > 1 && !omp_in_parallel() ? compute_threads() : 1;
@@ -359,16 +359,23 @@ struct KdIndex::Tree {
   }
 
   // Builds the subtree over slots begin .. end - 1 of buffer `from` into `out` and returns its
-  // cell's index there; each leaf stores its points in the tree's storage slots.
-  int32_t build(Buffers& buffers, int from, uint32_t begin, uint32_t end, std::vector<Cell>& out) {
+  // cell's index there; each leaf stores its points in the tree's storage slots. With `levels`
+  // >= 0, only that many levels are built: each subtree below them gets a placeholder cell and
+  // an entry in `parts`, to be built on its own and spliced in.
+  int32_t build(Buffers& buffers, int from, uint32_t begin, uint32_t end, std::vector<Cell>& out,
+                int levels = -1, std::vector<Part>* parts = nullptr) {
     const auto id = static_cast<int32_t>(out.size());
-    const Slot* slots = buffers.slots[static_cast<size_t>(from)].data();
+    if (levels == 0) {
+      out.emplace_back();
+      parts->push_back({id, from, begin, end});
+      return id;
+    }
+    Slot* slots = buffers.slots[static_cast<size_t>(from)].data();
     Cell c = bounds(slots, begin, end);
     out.push_back(c);
     if (end - begin <= kLeafSize) {
       // A leaf's points in input order (knn_self's ranking of a leaf breaks ties by position).
-      Slot* leaf = buffers.slots[static_cast<size_t>(from)].data();
-      std::sort(leaf + begin, leaf + end,
+      std::sort(slots + begin, slots + end,
                 [](const Slot& x, const Slot& y) { return x.original < y.original; });
       for (uint32_t i = begin; i < end; ++i) {
         std::copy_n(slots[i].p.data(), 3, &xyz[3 * static_cast<size_t>(i)]);
@@ -377,34 +384,17 @@ struct KdIndex::Tree {
       return id;
     }
     const uint32_t mid = split(slots, buffers.slots[static_cast<size_t>(1 - from)].data(), c);
-    c.child[0] = build(buffers, 1 - from, begin, mid, out);
-    c.child[1] = build(buffers, 1 - from, mid, end, out);
+    const int below = levels > 0 ? levels - 1 : levels;
+    c.child[0] = build(buffers, 1 - from, begin, mid, out, below, parts);
+    c.child[1] = build(buffers, 1 - from, mid, end, out, below, parts);
     out[static_cast<size_t>(id)] = c;
     return id;
   }
 
-  // The top `levels` levels of the tree over slots begin .. end - 1 of buffer `from`, in
-  // `cells`; the subtrees below them are left to `parts` (a placeholder cell each).
-  int32_t build_top(Buffers& buffers, int from, uint32_t begin, uint32_t end, int levels,
-                    std::vector<Part>& parts) {
-    const auto id = static_cast<int32_t>(cells.size());
-    if (levels == 0 || end - begin <= kLeafSize) {
-      cells.emplace_back();
-      parts.push_back({id, from, begin, end});
-      return id;
-    }
-    Cell c = bounds(buffers.slots[static_cast<size_t>(from)].data(), begin, end);
-    cells.push_back(c);
-    const uint32_t mid = split(buffers.slots[static_cast<size_t>(from)].data(),
-                               buffers.slots[static_cast<size_t>(1 - from)].data(), c);
-    c.child[0] = build_top(buffers, 1 - from, begin, mid, levels - 1, parts);
-    c.child[1] = build_top(buffers, 1 - from, mid, end, levels - 1, parts);
-    cells[static_cast<size_t>(id)] = c;
-    return id;
-  }
-
-  // Puts a part's cells in place: its root into the placeholder `at`, the rest after the cells.
+  // Moves a part built on its own into the tree: its root replaces the placeholder cell `at`,
+  // its other cells are appended to `cells`, and its child indices are shifted to match.
   void splice(int32_t at, const std::vector<Cell>& part) {
+    // Index j >= 1 in the part becomes base + j in `cells`.
     const auto base = static_cast<int32_t>(cells.size()) - 1;
     auto relabel = [&](Cell c) {
       for (int32_t& child : c.child) {
