@@ -49,8 +49,20 @@ std::vector<int32_t> select_ids(const std::vector<int32_t>& ids, const std::vect
   return out;
 }
 
-// The source trees of one level, built once and read by every list whose sources are that level
-// (same, relational, the next level's down list and this level's up list).
+// The rows `rows` of `list`, in that order.
+NeighborList select_list_rows(const NeighborList& list, const std::vector<int32_t>& rows) {
+  NeighborList out;
+  out.index.resize(static_cast<Eigen::Index>(rows.size()), list.k());
+  out.mask.resize(static_cast<Eigen::Index>(rows.size()), list.k());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    out.index.row(static_cast<Eigen::Index>(i)) = list.index.row(rows[i]);
+    out.mask.row(static_cast<Eigen::Index>(i)) = list.mask.row(rows[i]);
+  }
+  return out;
+}
+
+// The source trees of one level, built once and read by every list searched over that level's
+// points (its up and relational lists, and level 0's same list).
 class LevelIndex {
  public:
   LevelIndex(const HierarchyOptions& o, const HierarchyLevel& level) {
@@ -96,7 +108,6 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
   Hierarchy h;
   h.grid_anchor = Vec3(points.col(0).minCoeff(), points.col(1).minCoeff(), 0.0);
   h.levels.resize(static_cast<size_t>(options.levels));
-  std::unique_ptr<LevelIndex> prev_index;
   // With a cache: the level-0 point each point of the current and the previous level is.
   const bool cached = cache != nullptr && options.object_centric;
   std::vector<int32_t> origin, prev_origin;
@@ -119,7 +130,7 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
       level.points = select_rows(prev.points, level.kept);
       level.object_ids = select_ids(prev.object_ids, level.kept);
     }
-    auto index = std::make_unique<LevelIndex>(options, level);
+    const auto index = std::make_unique<LevelIndex>(options, level);
     if (cached) {
       prev_origin = std::move(origin);
       origin.resize(level.object_ids.size());
@@ -128,25 +139,28 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
             l == 0 ? static_cast<int32_t>(i) : prev_origin[static_cast<size_t>(level.kept[i])];
       }
     }
-    if (l > 0) {
+    if (l == 0) {
+      level.same = cached ? cache->same_object_list(slot(l, LevelList::kSame), level.points,
+                                                    level.object_ids, origin, level.points,
+                                                    *index->objects(), origin, options.k)
+                          : index->object_list(options, level);
+    } else {
+      // Every point of this level is point kept[i] of the previous one, with its object id, and
+      // the down, up and same lists share K and their sources' indexing. So two of the three are
+      // rows of lists searched anyway: this level's down list is the previous level's same list
+      // at the kept rows (same queries, same sources), and its same list is its up list at the
+      // kept rows (queries among the previous level's points, sources this level's).
       const HierarchyLevel& prev = h.levels[static_cast<size_t>(l - 1)];
-      level.down = cached ? cache->same_object_list(slot(l, LevelList::kDown), level.points,
-                                                    level.object_ids, origin, prev.points,
-                                                    *prev_index->objects(), prev_origin, options.k)
-                          : prev_index->object_list(options, level);
+      level.down = select_list_rows(prev.same, level.kept);
       level.up = cached ? cache->same_object_list(slot(l, LevelList::kUp), prev.points,
                                                   prev.object_ids, prev_origin, level.points,
                                                   *index->objects(), origin, options.k)
                         : index->object_list(options, prev);
+      level.same = select_list_rows(level.up, level.kept);
     }
-    level.same =
-        cached ? cache->same_object_list(slot(l, LevelList::kSame), level.points, level.object_ids,
-                                         origin, level.points, *index->objects(), origin, options.k)
-               : index->object_list(options, level);
     if (options.object_centric && options.point_relational) {
       level.relational = index->relational_list(options, level);
     }
-    prev_index = std::move(index);
   }
   return h;
 }

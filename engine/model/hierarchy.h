@@ -88,9 +88,10 @@ int mesh_list_source_level(MeshList list);  ///< 0, −1, −1
 
 /// Builds the hierarchy of `points` `[N,3]` with `object_ids` `[N]`. Throws ValueError on size
 /// mismatch, no points, non-finite values or options out of range. With a `cache` (one per
-/// rollout) the same-object lists (same, down, up) of objects that moved rigidly since they were
-/// searched over the same points are reused where certified (HierarchyCache); the result is the
-/// same as without it.
+/// rollout) the searched same-object lists of objects that moved rigidly since they were searched
+/// over the same points are reused where certified (HierarchyCache); the result is the same as
+/// without it. Level l's down list is level l−1's same list at the kept rows, and its same list
+/// its up list at the kept rows (each level-l point is a level-(l−1) point): searched once.
 Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
                           const HierarchyOptions& options, HierarchyCache* cache = nullptr);
 

@@ -10,8 +10,9 @@
 
 namespace dynscope {
 
-/// Keeps the same-object lists of a hierarchy (same, down and up at every level) from one step of
-/// a rollout to the next. A rigid motion preserves every distance within an object, and the
+/// Keeps the searched same-object lists of a hierarchy (level 0's same list and every coarser
+/// level's up list; build_hierarchy takes the others' rows from these) from one step of a rollout
+/// to the next. A rigid motion preserves every distance within an object, and the
 /// rollout's rigid projection moves each rigid object rigidly at every step, so an object's lists
 /// do not change while the points they connect stay the same (at level 0 always; at coarser
 /// levels while the voxel grid keeps the same points of the object, as for resting objects).

@@ -57,13 +57,11 @@ void expect_same_hierarchy(const Points& points, const std::vector<int32_t>& ids
   }
 }
 
-// Query rows of every same-object list of `h` (same at every level, down and up below level 0).
+// Query rows of the same-object lists of `h` that are searched (level 0's same list and the up
+// list of every coarser level; the other same-object lists are rows of these).
 int64_t list_rows(const Hierarchy& h) {
   int64_t rows = 0;
-  for (int l = 0; l < h.num_levels(); ++l) {
-    rows += h.levels[l].points.rows();
-    if (l > 0) rows += h.levels[l].points.rows() + h.levels[l - 1].points.rows();
-  }
+  for (int l = 0; l < h.num_levels(); ++l) rows += h.levels[l > 0 ? l - 1 : 0].points.rows();
   return rows;
 }
 

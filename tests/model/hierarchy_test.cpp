@@ -112,6 +112,35 @@ TEST(HierarchyTest, EveryListEqualsBruteForceOverItsLevels) {
   }
 }
 
+// The flat baseline's lists (plain kNN, the down and same lists taken from the lists searched at
+// the level below and at this level's up list) equal brute force too.
+TEST(HierarchyTest, FlatVariantListsEqualBruteForce) {
+  using reference::brute_force_knn;
+  using reference::Relation;
+  const auto scene = make_scene(3, 120, 8);
+  HierarchyOptions o = small_options();
+  o.object_centric = false;
+  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+  for (int l = 0; l < h.num_levels(); ++l) {
+    const HierarchyLevel& lv = h.levels[l];
+    const std::string what = "level " + std::to_string(l);
+    expect_same_list(
+        lv.same,
+        brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids, o.k, Relation::kAll),
+        what + " same");
+    if (l == 0) continue;
+    const HierarchyLevel& prev = h.levels[l - 1];
+    expect_same_list(lv.down,
+                     brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids, o.k,
+                                     Relation::kAll),
+                     what + " down");
+    expect_same_list(lv.up,
+                     brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids, o.k,
+                                     Relation::kAll),
+                     what + " up");
+  }
+}
+
 TEST(HierarchyTest, DoesNotDependOnTheThreadCount) {
   const auto scene = make_scene(3, 400, 7);
   for (const bool object_centric : {true, false}) {
