@@ -453,6 +453,31 @@ void KdIndex::knn(const Vec3& query, int k, std::vector<Neighbor>& out, double m
   out.resize(result.size());
 }
 
+size_t KdIndex::knn_rows(const double* queries, size_t m, int k, Neighbor* out) const {
+  bool ordinary = true;  // no query so far out that only a scan answers it
+  for (size_t i = 0; i < m; ++i) {
+    const Vec3 query(queries[3 * i], queries[3 * i + 1], queries[3 * i + 2]);
+    if (!query.allFinite()) throw ValueError("query", "point is not finite");
+    ordinary = ordinary && query.cwiseAbs().maxCoeff() <= kMaxCoordinate;
+  }
+  if (points_.rows() == 0 || k <= 0) return 0;
+  const auto n = static_cast<size_t>(points_.rows());
+  const size_t wanted = std::min(static_cast<size_t>(k), n);
+  if (!tree_ && ordinary) {
+    for (size_t i = 0; i < m; i += kSmallSetBatch) {
+      small_set_knn_batch(points_.data(), n, queries + 3 * i, std::min(kSmallSetBatch, m - i),
+                          wanted, out + i * wanted);
+    }
+    return wanted;
+  }
+  std::vector<Neighbor> found;
+  for (size_t i = 0; i < m; ++i) {
+    knn(Vec3(queries[3 * i], queries[3 * i + 1], queries[3 * i + 2]), k, found);
+    std::copy(found.begin(), found.end(), out + i * wanted);
+  }
+  return wanted;
+}
+
 void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const {
   out.clear();
   if (!query.allFinite()) throw ValueError("query", "point is not finite");

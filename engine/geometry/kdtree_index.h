@@ -52,6 +52,17 @@ class KdIndex {
   /// non-finite query.
   void knn(const Vec3& query, int k, std::vector<Neighbor>& out,
            double max_sq_dist = std::numeric_limits<double>::infinity()) const;
+  /// Queries knn_rows() answers together on a set too small for a tree: callers that group their
+  /// queries by index do best with runs of this many.
+  static constexpr size_t kBatchRows = 8;
+
+  /// knn() without a distance limit for `m` queries (`queries` row-major x, y, z): writes query
+  /// i's min(k, size()) nearest to out[i·min(k, size()) ...] and returns min(k, size()) (0 for
+  /// k <= 0 or an empty set). Sets too small for a tree answer several queries together
+  /// (small_set_knn_batch), much faster than one knn() each. Throws ValueError for a non-finite
+  /// query.
+  size_t knn_rows(const double* queries, size_t m, int k, Neighbor* out) const;
+
   /// Replaces `out` with every point whose squared distance to `query` is <= radius², sorted.
   /// Throws ValueError for a non-finite query.
   void radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const;

@@ -3,6 +3,7 @@
 #include "engine/geometry/neighbors.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <optional>
@@ -147,13 +148,35 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
                               const ObjectIndex& source, int k) {
   if (queries_are_indexed(query, query_ids, source)) return same_object_self_rows(source, k);
   NeighborList out = empty_list(query.rows(), k);
-  for_each_query(
-      query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found, std::vector<Neighbor>&) {
-        const ObjectIndex::Object* object = source.find(query_ids[static_cast<size_t>(i)]);
-        if (object == nullptr) return;
-        object->tree.knn(query.row(i).transpose(), k, found);
-        write_row(out, i, found, &object->global);
-      });
+  // Runs of up to KdIndex::kBatchRows queries of one object, each run's searches given to its
+  // object's index together (KdIndex::knn_rows).
+  std::vector<Eigen::Index> order(static_cast<size_t>(query.rows()));
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
+  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
+    return query_ids[static_cast<size_t>(a)] < query_ids[static_cast<size_t>(b)];
+  });
+  std::vector<size_t> run_begin;
+  for (size_t i = 0; i < order.size(); ++i) {
+    if (run_begin.empty() || i - run_begin.back() == KdIndex::kBatchRows ||
+        query_ids[static_cast<size_t>(order[i])] != query_ids[static_cast<size_t>(order[i - 1])]) {
+      run_begin.push_back(i);
+    }
+  }
+  run_begin.push_back(order.size());
+  for_each_group(run_begin.size() - 1, query.rows(), [&](size_t r, std::vector<Neighbor>& found) {
+    const size_t begin = run_begin[r], count = run_begin[r + 1] - begin;
+    const ObjectIndex::Object* object = source.find(query_ids[static_cast<size_t>(order[begin])]);
+    if (object == nullptr) return;
+    std::array<double, 3 * KdIndex::kBatchRows> queries;
+    for (size_t c = 0; c < count; ++c) {
+      for (int d = 0; d < 3; ++d) queries[3 * c + static_cast<size_t>(d)] = query(order[begin + c], d);
+    }
+    found.resize(count * static_cast<size_t>(k));
+    const size_t stride = object->tree.knn_rows(queries.data(), count, k, found.data());
+    for (size_t c = 0; c < count; ++c) {
+      write_row(out, order[begin + c], found.data() + c * stride, stride, &object->global);
+    }
+  });
   return out;
 }
 

@@ -49,6 +49,52 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
 }
 
 DYNSCOPE_ISA_CLONES
+void small_set_knn_batch(const double* xyz, size_t n, const double* queries, size_t m, size_t k,
+                         Neighbor* out) {
+  // One lane per query; the clones map a vector to one AVX-512 register, two AVX2 or four SSE2.
+  using Doubles = double __attribute__((vector_size(8 * kSmallSetBatch)));
+  using Counts = int64_t __attribute__((vector_size(8 * kSmallSetBatch)));
+  n = std::min(n, kSmallSetSize);
+  m = std::min(m, kSmallSetBatch);
+  k = std::min(k, n);
+  if (m == 0 || k == 0) return;
+  Doubles qx, qy, qz;
+  for (size_t q = 0; q < kSmallSetBatch; ++q) {
+    const size_t row = q < m ? q : 0;  // spare lanes repeat the first query
+    qx[q] = queries[3 * row];
+    qy[q] = queries[3 * row + 1];
+    qz[q] = queries[3 * row + 2];
+  }
+  std::array<Doubles, kSmallSetSize> d;
+  std::array<Counts, kSmallSetSize> place;
+  for (size_t j = 0; j < n; ++j) {
+    const Doubles dx = qx - xyz[3 * j], dy = qy - xyz[3 * j + 1], dz = qz - xyz[3 * j + 2];
+    d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+    place[j] = Counts{} + static_cast<int64_t>(j);
+  }
+  // A point's place in (distance, position) order: start from its position, as if every earlier
+  // point ordered before it; each pair then moves the later point forward and the earlier one back
+  // when the later one is strictly nearer (a comparison is -1 where true, 0 where false).
+  for (size_t a = 0; a < n; ++a) {
+    Counts moved = Counts{};
+    for (size_t b = a + 1; b < n; ++b) {
+      const Counts later_nearer = d[b] < d[a];
+      moved -= later_nearer;
+      place[b] += later_nearer;
+    }
+    place[a] += moved;
+  }
+  // The places of a query's points are 0 .. n−1 without repeats: write all, keep the first k.
+  std::array<Neighbor, kSmallSetSize> sorted;
+  for (size_t q = 0; q < m; ++q) {
+    for (size_t j = 0; j < n; ++j) {
+      sorted[static_cast<size_t>(place[j][q])] = {d[j][q], static_cast<int32_t>(j)};
+    }
+    std::copy_n(sorted.begin(), k, out + q * k);
+  }
+}
+
+DYNSCOPE_ISA_CLONES
 size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
                     Neighbor* out) {
   // The indices ascend with the position, so position order is index order.

@@ -22,6 +22,17 @@ constexpr size_t kSmallSetSize = 48;
 size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, double max_sq_dist,
                      Neighbor* out);
 
+/// Queries small_set_knn_batch() answers together.
+constexpr size_t kSmallSetBatch = KdIndex::kBatchRows;
+
+/// small_set_knn() without a distance limit for `m` <= kSmallSetBatch queries at once (`queries`
+/// row-major x, y, z): writes query i's min(k, n) nearest to out[i·min(k, n) ...], the same lists
+/// as one small_set_knn() per query. The queries are the vector lanes, so every pair of points is
+/// compared once for all of them: several times faster than one call per query when whole objects
+/// are queried against a small set (a coarse level's up list).
+void small_set_knn_batch(const double* xyz, size_t n, const double* queries, size_t m, size_t k,
+                         Neighbor* out);
+
 /// Writes to `out` the min(k, count) of `n` <= kSmallSetSize candidates (squared distance `d[j]`,
 /// index `index[j]`) among the `count` with d[j] <= `max_sq_dist`, sorted by (distance, index),
 /// and returns how many it wrote: the ranking small_set_knn() uses, for candidates whose distances

@@ -2,6 +2,7 @@
 #include "engine/model/hierarchy_cache.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -155,51 +156,74 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
     plans.push_back(std::move(plan));
   }
 
-  // Then every row of every object in one parallel loop (objects are often too small for a
-  // parallel loop of their own).
-  std::vector<int64_t> offset(plans.size() + 1, 0);
+  // Then every row of every object in one parallel loop over runs of up to KdIndex::kBatchRows rows of
+  // one object (objects are often too small for a parallel loop of their own); a run's searches
+  // go to its object's index together (KdIndex::knn_rows).
+  constexpr size_t kRun = KdIndex::kBatchRows;
+  std::vector<int64_t> offset(plans.size() + 1, 0);  // each plan's first run
+  int64_t total = 0;
   for (size_t p = 0; p < plans.size(); ++p) {
-    offset[p + 1] = offset[p] + static_cast<int64_t>(plans[p].rows.size());
+    offset[p + 1] = offset[p] + static_cast<int64_t>((plans[p].rows.size() + kRun - 1) / kRun);
+    total += static_cast<int64_t>(plans[p].rows.size());
   }
-  const int64_t total = offset.back();
+  const int64_t runs = offset.back();
   const int threads = total >= kMinParallelRows ? compute_threads() : 1;
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     std::vector<Neighbor> found;
-#pragma omp for schedule(dynamic, 64)
-    for (int64_t r = 0; r < total; ++r) {
+    std::array<double, 3 * kRun> queries;
+    std::array<size_t, kRun> searched;  // the run's rows that are searched
+#pragma omp for schedule(dynamic, 8)
+    for (int64_t r = 0; r < runs; ++r) {
       const auto p = static_cast<size_t>(std::upper_bound(offset.begin(), offset.end(), r) -
                                          offset.begin() - 1);
       const Plan& plan = plans[p];
       Entry& entry = next[plan.entry];
-      const auto i = static_cast<size_t>(r - offset[p]);
-      const Eigen::Index row = plan.rows[i];
       const std::vector<int32_t>& global = plan.object->global;
-      const Vec3 point = plan.current.row(static_cast<Eigen::Index>(i)).transpose();
-      if (plan.mode == Mode::kReuse && plan.certified[i]) {
-        const int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
-        for (int j = 0; j < std::min(k, entry.width); ++j) {
-          out.index(row, j) = global[static_cast<size_t>(stored[j])];
-          out.mask(row, j) = 1;
+      const size_t begin = static_cast<size_t>(r - offset[p]) * kRun;
+      const size_t end = std::min(begin + kRun, plan.rows.size());
+      size_t count = 0;
+      for (size_t i = begin; i < end; ++i) {
+        const Eigen::Index row = plan.rows[i];
+        if (plan.mode == Mode::kReuse && plan.certified[i]) {
+          const int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
+          for (int j = 0; j < std::min(k, entry.width); ++j) {
+            out.index(row, j) = global[static_cast<size_t>(stored[j])];
+            out.mask(row, j) = 1;
+          }
+          continue;
         }
-        continue;
+        for (int c = 0; c < 3; ++c) {
+          queries[3 * count + static_cast<size_t>(c)] =
+              plan.current(static_cast<Eigen::Index>(i), c);
+        }
+        searched[count++] = i;
       }
+      if (count == 0) continue;
       const bool anchor = plan.mode == Mode::kAnchor;
-      plan.object->tree.knn(point, anchor ? entry.width : k, found);
-      for (size_t j = 0; j < found.size() && j < static_cast<size_t>(k); ++j) {
-        out.index(row, static_cast<Eigen::Index>(j)) = global[static_cast<size_t>(found[j].index)];
-        out.mask(row, static_cast<Eigen::Index>(j)) = 1;
+      const int width = anchor ? entry.width : k;
+      found.resize(count * static_cast<size_t>(width));
+      const size_t stride = plan.object->tree.knn_rows(queries.data(), count, width, found.data());
+      for (size_t c = 0; c < count; ++c) {
+        const size_t i = searched[c];
+        const Eigen::Index row = plan.rows[i];
+        const Neighbor* nearest = found.data() + c * stride;
+        for (size_t j = 0; j < stride && j < static_cast<size_t>(k); ++j) {
+          out.index(row, static_cast<Eigen::Index>(j)) =
+              global[static_cast<size_t>(nearest[j].index)];
+          out.mask(row, static_cast<Eigen::Index>(j)) = 1;
+        }
+        if (!anchor) continue;
+        int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
+        double last = 0.0;
+        for (size_t j = 0; j < stride; ++j) {
+          stored[j] = nearest[j].index;
+          const double d = std::sqrt(nearest[j].sq_dist);
+          if (j > 0) entry.gap[i] = std::min(entry.gap[i], d - last);
+          last = d;
+        }
+        entry.farthest[i] = last;
       }
-      if (!anchor) continue;
-      int32_t* nearest = &entry.nearest[i * static_cast<size_t>(entry.width)];
-      double last = 0.0;
-      for (size_t j = 0; j < found.size(); ++j) {
-        nearest[j] = found[j].index;
-        const double d = std::sqrt(found[j].sq_dist);
-        if (j > 0) entry.gap[i] = std::min(entry.gap[i], d - last);
-        last = d;
-      }
-      entry.farthest[i] = last;
     }
   }
   previous = std::move(next);

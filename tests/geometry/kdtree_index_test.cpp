@@ -344,6 +344,60 @@ TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
   }
 }
 
+TEST(KdIndexTest, RowsAnsweredTogetherEqualBruteForce) {
+  // knn_rows over sets with and without a tree: lattice points (ties and duplicates, queries on
+  // the points themselves) and surface points near and far from the origin, any number of queries
+  // (whole runs, a partial last run), k from one to past the set's size, and queries so far out
+  // that only a scan answers them mixed into a run.
+  Rng rng(37);
+  for (const Eigen::Index n : {1, 2, 9, 16, 17, 31, 32, 47, 48, 49, 80}) {
+    for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
+      Points surface(n, 3);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+        surface.row(i) = (0.3 * v.normalized() + offset).transpose();
+      }
+      for (const Points& points : {lattice_cloud(60 + static_cast<uint64_t>(n), n, offset), surface}) {
+        const KdIndex index(points);
+        for (const size_t m : {size_t{1}, size_t{5}, size_t{8}, size_t{19}}) {
+          Points queries(static_cast<Eigen::Index>(m), 3);
+          for (size_t t = 0; t < m; ++t) {
+            Vec3 q(static_cast<double>(rng.uniform_int(0, 5)),
+                   static_cast<double>(rng.uniform_int(0, 5)),
+                   static_cast<double>(rng.uniform_int(0, 3)));
+            if (t % 3 == 1) q += Vec3(0.5, 0.5, 0.5);
+            q = t % 3 == 2 ? Vec3(points.row(static_cast<Eigen::Index>(t) % n).transpose())
+                           : Vec3(q + offset);
+            if (m == 19 && t == 11) q = Vec3(1e30, 0, 0);
+            queries.row(static_cast<Eigen::Index>(t)) = q.transpose();
+          }
+          for (const int k : {1, 5, 16, 100}) {
+            const size_t wanted = std::min(static_cast<size_t>(k), static_cast<size_t>(n));
+            std::vector<Neighbor> out(m * wanted);
+            ASSERT_EQ(index.knn_rows(queries.data(), m, k, out.data()), wanted);
+            for (size_t t = 0; t < m; ++t) {
+              const std::vector<Neighbor> all =
+                  brute_force(points, queries.row(static_cast<Eigen::Index>(t)).transpose());
+              SCOPED_TRACE("n " + std::to_string(n) + " m " + std::to_string(m) + " k " +
+                           std::to_string(k) + " query " + std::to_string(t));
+              expect_same(std::vector<Neighbor>(out.begin() + static_cast<std::ptrdiff_t>(t * wanted),
+                                                out.begin() + static_cast<std::ptrdiff_t>((t + 1) * wanted)),
+                          std::vector<Neighbor>(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(wanted)));
+              if (HasFatalFailure()) return;
+            }
+          }
+        }
+      }
+    }
+  }
+  const KdIndex index(lattice_cloud(3, 20, Vec3::Zero()));
+  std::vector<Neighbor> out(2 * 4);
+  const double bad[6] = {0, 0, 0, 0, std::nan(""), 0};
+  EXPECT_THROW(index.knn_rows(bad, 2, 4, out.data()), ValueError);
+  EXPECT_EQ(index.knn_rows(bad, 1, 0, out.data()), 0u);
+  EXPECT_EQ(KdIndex(Points(0, 3)).knn_rows(bad, 1, 4, out.data()), 0u);
+}
+
 TEST(KdIndexTest, SeparatesDistancesFloatCannot) {
   // Ten points on a sphere of radius 1 around the query, radii differing by 1e-12: identical in
   // float, so only the double recomputation orders them (here: reverse index order).
