@@ -305,6 +305,26 @@ TEST(KdIndexTest, TinySetsAndFarQueriesEqualBruteForce) {
   }
 }
 
+// `n` points on a sphere of radius 0.3 around `offset`.
+Points sphere_cloud(Rng& rng, Eigen::Index n, const Vec3& offset) {
+  Points out(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3 v(rng.normal(), rng.normal(), rng.normal());
+    out.row(i) = (0.3 * v.normalized() + offset).transpose();
+  }
+  return out;
+}
+
+// Query `t` of a test over `points` placed around `offset`: by turns on a lattice point, between
+// lattice points, and on a point of the set.
+Vec3 mixed_query(Rng& rng, int t, const Points& points, const Vec3& offset) {
+  Vec3 q(static_cast<double>(rng.uniform_int(0, 5)), static_cast<double>(rng.uniform_int(0, 5)),
+         static_cast<double>(rng.uniform_int(0, 3)));
+  if (t % 3 == 1) q += Vec3(0.5, 0.5, 0.5);
+  if (t % 3 == 2) return points.row(t % points.rows()).transpose();
+  return q + offset;
+}
+
 TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
   // Sets answered by ranking every distance and sets with a tree, on both sides of the size where
   // one takes over from the other: lattice points (ties and duplicates at every place) and
@@ -313,21 +333,12 @@ TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
   Rng rng(31);
   for (const Eigen::Index n : {1, 2, 7, 24, 25, 31, 32, 33, 47, 48, 49, 63, 64, 65, 97}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
-      Points surface(n, 3);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const Vec3 v(rng.normal(), rng.normal(), rng.normal());
-        surface.row(i) = (0.3 * v.normalized() + offset).transpose();
-      }
+      const Points surface = sphere_cloud(rng, n, offset);
       for (const Points& points : {lattice_cloud(40 + static_cast<uint64_t>(n), n, offset), surface}) {
         const KdIndex index(points);
         std::vector<Neighbor> found;
         for (int t = 0; t < 12; ++t) {
-          Vec3 q(static_cast<double>(rng.uniform_int(0, 5)),
-                 static_cast<double>(rng.uniform_int(0, 5)),
-                 static_cast<double>(rng.uniform_int(0, 3)));
-          if (t % 3 == 1) q += Vec3(0.5, 0.5, 0.5);
-          if (t % 3 == 2) q = points.row(t % n).transpose();  // on a point of the set
-          else q += offset;
+          const Vec3 q = mixed_query(rng, t, points, offset);
           const std::vector<Neighbor> all = brute_force(points, q);
           for (const int k : {1, 5, 16, 47, 100}) {
             for (const double limit : {std::numeric_limits<double>::infinity(), 2.0, 0.0}) {
@@ -352,22 +363,13 @@ TEST(KdIndexTest, RowsAnsweredTogetherEqualBruteForce) {
   Rng rng(37);
   for (const Eigen::Index n : {1, 2, 9, 16, 17, 31, 32, 47, 48, 49, 80}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
-      Points surface(n, 3);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const Vec3 v(rng.normal(), rng.normal(), rng.normal());
-        surface.row(i) = (0.3 * v.normalized() + offset).transpose();
-      }
+      const Points surface = sphere_cloud(rng, n, offset);
       for (const Points& points : {lattice_cloud(60 + static_cast<uint64_t>(n), n, offset), surface}) {
         const KdIndex index(points);
         for (const size_t m : {size_t{1}, size_t{5}, size_t{8}, size_t{19}}) {
           Points queries(static_cast<Eigen::Index>(m), 3);
           for (size_t t = 0; t < m; ++t) {
-            Vec3 q(static_cast<double>(rng.uniform_int(0, 5)),
-                   static_cast<double>(rng.uniform_int(0, 5)),
-                   static_cast<double>(rng.uniform_int(0, 3)));
-            if (t % 3 == 1) q += Vec3(0.5, 0.5, 0.5);
-            q = t % 3 == 2 ? Vec3(points.row(static_cast<Eigen::Index>(t) % n).transpose())
-                           : Vec3(q + offset);
+            Vec3 q = mixed_query(rng, static_cast<int>(t), points, offset);
             if (m == 19 && t == 11) q = Vec3(1e30, 0, 0);
             queries.row(static_cast<Eigen::Index>(t)) = q.transpose();
           }

@@ -82,62 +82,44 @@ void expect_same_list(const NeighborList& actual, const NeighborList& expected,
   EXPECT_EQ(actual.mask, expected.mask) << what;
 }
 
+// Every list of every level equals brute force over the levels' points, for the paper's model
+// (same-object and relational lists) and for the flat baseline (plain kNN). The down and same
+// lists of the coarser levels are taken from the searched lists (build_hierarchy), so this also
+// checks those identities.
 TEST(HierarchyTest, EveryListEqualsBruteForceOverItsLevels) {
   using reference::brute_force_knn;
   using reference::Relation;
   const auto scene = make_scene(4, 150, 6);
-  const HierarchyOptions o = small_options();
-  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
-  for (int l = 0; l < h.num_levels(); ++l) {
-    const HierarchyLevel& lv = h.levels[l];
-    const std::string what = "level " + std::to_string(l);
-    expect_same_list(lv.same,
-                     brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids, o.k,
-                                     Relation::kSameObject),
-                     what + " same");
-    expect_same_list(lv.relational,
-                     brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids,
-                                     o.k_relational, Relation::kOtherObject, lv.radius),
-                     what + " relational");
-    if (l == 0) continue;
-    const HierarchyLevel& prev = h.levels[l - 1];
-    expect_same_list(lv.down,
-                     brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids, o.k,
-                                     Relation::kSameObject),
-                     what + " down");
-    expect_same_list(lv.up,
-                     brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids, o.k,
-                                     Relation::kSameObject),
-                     what + " up");
-  }
-}
-
-// The flat baseline's lists (plain kNN, the down and same lists taken from the lists searched at
-// the level below and at this level's up list) equal brute force too.
-TEST(HierarchyTest, FlatVariantListsEqualBruteForce) {
-  using reference::brute_force_knn;
-  using reference::Relation;
-  const auto scene = make_scene(3, 120, 8);
-  HierarchyOptions o = small_options();
-  o.object_centric = false;
-  const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
-  for (int l = 0; l < h.num_levels(); ++l) {
-    const HierarchyLevel& lv = h.levels[l];
-    const std::string what = "level " + std::to_string(l);
-    expect_same_list(
-        lv.same,
-        brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids, o.k, Relation::kAll),
-        what + " same");
-    if (l == 0) continue;
-    const HierarchyLevel& prev = h.levels[l - 1];
-    expect_same_list(lv.down,
-                     brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids, o.k,
-                                     Relation::kAll),
-                     what + " down");
-    expect_same_list(lv.up,
-                     brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids, o.k,
-                                     Relation::kAll),
-                     what + " up");
+  for (const bool object_centric : {true, false}) {
+    HierarchyOptions o = small_options();
+    o.object_centric = object_centric;
+    const Relation relation = object_centric ? Relation::kSameObject : Relation::kAll;
+    const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+    for (int l = 0; l < h.num_levels(); ++l) {
+      const HierarchyLevel& lv = h.levels[l];
+      const std::string what =
+          std::string(object_centric ? "object-centric" : "flat") + " level " + std::to_string(l);
+      expect_same_list(
+          lv.same,
+          brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids, o.k, relation),
+          what + " same");
+      if (object_centric) {
+        expect_same_list(lv.relational,
+                         brute_force_knn(lv.points, lv.object_ids, lv.points, lv.object_ids,
+                                         o.k_relational, Relation::kOtherObject, lv.radius),
+                         what + " relational");
+      }
+      if (l == 0) continue;
+      const HierarchyLevel& prev = h.levels[l - 1];
+      expect_same_list(lv.down,
+                       brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids,
+                                       o.k, relation),
+                       what + " down");
+      expect_same_list(lv.up,
+                       brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids,
+                                       o.k, relation),
+                       what + " up");
+    }
   }
 }
 
