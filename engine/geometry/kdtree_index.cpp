@@ -249,12 +249,17 @@ struct KdIndex::Tree {
   void descend(int32_t id, const double* q, std::array<double, 3>& gap2, Result& result) const {
     const Node& node = nodes[static_cast<size_t>(id)];
     if (node.axis < 0) {
-      for (auto slot = static_cast<uint32_t>(node.a); slot < static_cast<uint32_t>(node.b);
-           ++slot) {
-        const double* p = &xyz[3 * static_cast<size_t>(slot)];
-        const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-        const double d = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
-        if (d <= result.bound()) result.add(d, slot);
+      // The leaf's distances together, then only the points within the bound offered (the bound
+      // may shrink as they are: the result checks each against its own).
+      std::array<double, kLeafSize> d;
+      const auto first = static_cast<uint32_t>(node.a);
+      uint32_t mask = leaf_candidates(&xyz[3 * static_cast<size_t>(first)],
+                                      static_cast<uint32_t>(node.b) - first, q, result.bound(),
+                                      d.data());
+      while (mask != 0) {
+        const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
+        mask &= mask - 1;
+        result.add(d[j], first + j);
       }
       return;
     }

@@ -95,6 +95,20 @@ void small_set_knn_batch(const double* xyz, size_t n, const double* queries, siz
 }
 
 DYNSCOPE_ISA_CLONES
+uint32_t leaf_candidates(const double* xyz, uint32_t n, const double* query, double max_sq_dist,
+                         double* d) {
+  n = std::min(n, 32u);
+  const double qx = query[0], qy = query[1], qz = query[2];
+  uint32_t mask = 0;
+  for (uint32_t j = 0; j < n; ++j) {
+    const double dx = qx - xyz[3 * j], dy = qy - xyz[3 * j + 1], dz = qz - xyz[3 * j + 2];
+    d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
+    mask |= static_cast<uint32_t>(d[j] <= max_sq_dist) << j;
+  }
+  return mask;
+}
+
+DYNSCOPE_ISA_CLONES
 size_t rank_nearest(const double* d, const int32_t* index, size_t n, size_t k, double max_sq_dist,
                     Neighbor* out) {
   // The indices ascend with the position, so position order is index order.

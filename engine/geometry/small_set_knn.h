@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 #include "engine/geometry/kdtree_index.h"
 
@@ -32,6 +33,12 @@ constexpr size_t kSmallSetBatch = KdIndex::kBatchRows;
 /// are queried against a small set (a coarse level's up list).
 void small_set_knn_batch(const double* xyz, size_t n, const double* queries, size_t m, size_t k,
                          Neighbor* out);
+
+/// Writes the squared distances from `query` to the `n` <= 32 points of `xyz` (row-major x, y, z)
+/// to `d`, rounded as squared_distance(), and returns a mask with bit j set where d[j] <=
+/// `max_sq_dist`: a kd-tree leaf's candidates, without a branch per point (cloned like the rest).
+uint32_t leaf_candidates(const double* xyz, uint32_t n, const double* query, double max_sq_dist,
+                         double* d);
 
 /// Writes to `out` the min(k, count) of `n` <= kSmallSetSize candidates (squared distance `d[j]`,
 /// index `index[j]`) among the `count` with d[j] <= `max_sq_dist`, sorted by (distance, index),
