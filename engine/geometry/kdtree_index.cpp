@@ -364,9 +364,9 @@ struct KdIndex::Tree {
   }
 
   // Builds the subtree over slots begin .. end - 1 of buffer `from` into `out` and returns its
-  // cell's index there; each leaf stores its points in the tree's storage slots. With `levels`
-  // >= 0, only that many levels are built: each subtree below them gets a placeholder cell and
-  // an entry in `parts`, to be built on its own and spliced in.
+  // cell's index there; each leaf stores its points in the tree's storage slots. With a
+  // non-negative `levels`, only that many levels are built: each subtree below them gets a
+  // placeholder cell and an entry in `parts`, to be built on its own and spliced in.
   int32_t build(Buffers& buffers, int from, uint32_t begin, uint32_t end, std::vector<Cell>& out,
                 int levels = -1, std::vector<Part>* parts = nullptr) {
     const auto id = static_cast<int32_t>(out.size());
@@ -530,23 +530,17 @@ void KdIndex::knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
       size_t c = count[qi];
       const bool full = c == wanted;
       if (full && Tree::point_box_distance(q, leaf) > widen(best[wanted - 1].sq_dist)) continue;
-      for (uint32_t j = 0; j < n; ++j) {
-        const double* p = &t.xyz[3 * (leaf.begin + j)];
-        const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-        d[j] = dx * dx + dy * dy + dz * dz;  // squared_distance()'s rounding
-      }
+      // The leaf's distances, and its candidates at or below the k-th distance as a bit mask.
+      const double limit =
+          full ? best[wanted - 1].sq_dist : std::numeric_limits<double>::infinity();
+      uint32_t mask = leaf_candidates(&t.xyz[3 * leaf.begin], n, q, limit, d.data());
       if (c == 0) {
         // The first leaf (the group's own): every candidate placed by counting, not inserted.
         count[qi] = rank_nearest(d.data(), &t.original[leaf.begin], n, wanted,
                                  std::numeric_limits<double>::infinity(), best);
         continue;
       }
-      // Candidates at or below the k-th distance as a bit mask, computed without branches; only
-      // those are inserted, in index order within the leaf.
-      const double limit =
-          full ? best[wanted - 1].sq_dist : std::numeric_limits<double>::infinity();
-      uint32_t mask = 0;
-      for (uint32_t j = 0; j < n; ++j) mask |= static_cast<uint32_t>(d[j] <= limit) << j;
+      // Only the candidates are inserted, in index order within the leaf.
       NearestSet set(best, wanted, c);
       while (mask != 0) {
         const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
