@@ -100,6 +100,16 @@ void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
   }
 }
 
+// Every row, ordered by its id and, within an id, ascending.
+std::vector<int32_t> rows_by_id(const std::vector<int32_t>& ids) {
+  std::vector<int32_t> order(ids.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int32_t>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
+  });
+  return order;
+}
+
 // True when the queries are the tree's own points, in its order (a same-level list).
 bool queries_are_indexed(const Points& query, const KdIndex& source) {
   if (query.rows() != source.size()) return false;
@@ -150,11 +160,7 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
   NeighborList out = empty_list(query.rows(), k);
   // Runs of up to KdIndex::kBatchRows queries of one object, each run's searches given to its
   // object's index together (KdIndex::knn_rows).
-  std::vector<Eigen::Index> order(static_cast<size_t>(query.rows()));
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
-  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
-    return query_ids[static_cast<size_t>(a)] < query_ids[static_cast<size_t>(b)];
-  });
+  const std::vector<int32_t> order = rows_by_id(query_ids);
   std::vector<size_t> run_begin;
   for (size_t i = 0; i < order.size(); ++i) {
     if (run_begin.empty() || i - run_begin.back() == KdIndex::kBatchRows ||
@@ -169,7 +175,9 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
     if (object == nullptr) return;
     std::array<double, 3 * KdIndex::kBatchRows> queries;
     for (size_t c = 0; c < count; ++c) {
-      for (int d = 0; d < 3; ++d) queries[3 * c + static_cast<size_t>(d)] = query(order[begin + c], d);
+      for (int d = 0; d < 3; ++d) {
+        queries[3 * c + static_cast<size_t>(d)] = query(order[begin + c], d);
+      }
     }
     found.resize(count * static_cast<size_t>(k));
     const size_t stride = object->tree.knn_rows(queries.data(), count, k, found.data());
@@ -243,11 +251,7 @@ ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
   check_points(points, &ids, "source");
   // Group by id with one sort instead of a map: local indices follow ascending global order, so
   // tie-breaking by local index equals tie-breaking by global index.
-  std::vector<int32_t> order(ids.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int32_t>(i);
-  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
-    return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
-  });
+  const std::vector<int32_t> order = rows_by_id(ids);
   std::vector<std::pair<size_t, size_t>> ranges;  // each object's run of `order`
   for (size_t begin = 0; begin < order.size();) {
     const int32_t id = ids[static_cast<size_t>(order[begin])];

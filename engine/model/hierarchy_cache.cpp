@@ -156,9 +156,9 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
     plans.push_back(std::move(plan));
   }
 
-  // Then every row of every object in one parallel loop over runs of up to KdIndex::kBatchRows rows of
-  // one object (objects are often too small for a parallel loop of their own); a run's searches
-  // go to its object's index together (KdIndex::knn_rows).
+  // Then every row of every object in one parallel loop over runs of up to KdIndex::kBatchRows
+  // rows of one object (objects are often too small for a parallel loop of their own); a run's
+  // searches go to its object's index together (KdIndex::knn_rows).
   constexpr size_t kRun = KdIndex::kBatchRows;
   std::vector<int64_t> offset(plans.size() + 1, 0);  // each plan's first run
   int64_t total = 0;

@@ -225,8 +225,8 @@ TEST(KdIndexTest, GeometricallySpacedPointsEqualBruteForce) {
   // every split plane, and a second axis of small steps.
   Points points(3000, 3);
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    points.row(i) << std::ldexp(1.0, -static_cast<int>(i % 1000)), 1e-3 * static_cast<double>(i % 7),
-        0.0;
+    points.row(i) << std::ldexp(1.0, -static_cast<int>(i % 1000)),
+        1e-3 * static_cast<double>(i % 7), 0.0;
   }
   const KdIndex index(points);
   const std::vector<std::vector<Neighbor>> answers = self_answers(index, 16);
@@ -334,7 +334,8 @@ TEST(KdIndexTest, SetsAroundTheSmallSetSizeEqualBruteForce) {
   for (const Eigen::Index n : {1, 2, 7, 24, 25, 31, 32, 33, 47, 48, 49, 63, 64, 65, 97}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
       const Points surface = sphere_cloud(rng, n, offset);
-      for (const Points& points : {lattice_cloud(40 + static_cast<uint64_t>(n), n, offset), surface}) {
+      const Points lattice = lattice_cloud(40 + static_cast<uint64_t>(n), n, offset);
+      for (const Points& points : {lattice, surface}) {
         const KdIndex index(points);
         std::vector<Neighbor> found;
         for (int t = 0; t < 12; ++t) {
@@ -364,7 +365,8 @@ TEST(KdIndexTest, RowsAnsweredTogetherEqualBruteForce) {
   for (const Eigen::Index n : {1, 2, 9, 16, 17, 31, 32, 47, 48, 49, 80}) {
     for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e6, -3e6, 2.5e5)}) {
       const Points surface = sphere_cloud(rng, n, offset);
-      for (const Points& points : {lattice_cloud(60 + static_cast<uint64_t>(n), n, offset), surface}) {
+      const Points lattice = lattice_cloud(60 + static_cast<uint64_t>(n), n, offset);
+      for (const Points& points : {lattice, surface}) {
         const KdIndex index(points);
         for (const size_t m : {size_t{1}, size_t{5}, size_t{8}, size_t{19}}) {
           Points queries(static_cast<Eigen::Index>(m), 3);
@@ -382,9 +384,10 @@ TEST(KdIndexTest, RowsAnsweredTogetherEqualBruteForce) {
                   brute_force(points, queries.row(static_cast<Eigen::Index>(t)).transpose());
               SCOPED_TRACE("n " + std::to_string(n) + " m " + std::to_string(m) + " k " +
                            std::to_string(k) + " query " + std::to_string(t));
-              expect_same(std::vector<Neighbor>(out.begin() + static_cast<std::ptrdiff_t>(t * wanted),
-                                                out.begin() + static_cast<std::ptrdiff_t>((t + 1) * wanted)),
-                          std::vector<Neighbor>(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(wanted)));
+              const auto row = out.begin() + static_cast<std::ptrdiff_t>(t * wanted);
+              const auto width = static_cast<std::ptrdiff_t>(wanted);
+              expect_same(std::vector<Neighbor>(row, row + width),
+                          std::vector<Neighbor>(all.begin(), all.begin() + width));
               if (HasFatalFailure()) return;
             }
           }
