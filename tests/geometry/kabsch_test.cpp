@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -158,6 +159,29 @@ TEST(KabschTest, ReflectedTargetsStillGiveAProperRotation) {
   EXPECT_LT(std::sqrt(residual(fit, planar, target)), 1e-9);
 }
 
+TEST(KabschTest, EqualsEigensUmeyamaIncludingFarFromTheOrigin) {
+  // The reference formulation: Eigen::umeyama without scaling, on the same points.
+  for (uint64_t seed = 200; seed < 230; ++seed) {
+    Rng rng(seed);
+    const double offset = seed % 3 == 0 ? 0.0 : (seed % 3 == 1 ? 1.0e4 : -3.0e6);
+    Pose truth;
+    truth.rotation = random_rotation(rng);
+    truth.position = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    Points source = random_points(rng, 2 + static_cast<Eigen::Index>(seed % 700));
+    source.array() += offset;
+    const Points target =
+        truth.apply(source) + random_points(rng, source.rows(), seed % 2 == 0 ? 0.0 : 0.01);
+    const Eigen::Matrix4d reference = Eigen::umeyama(source.transpose(), target.transpose(), false);
+    const Pose fit = fit_rigid_transform(source, target);
+    expect_proper_rotation(fit);
+    const Mat3 r = fit.rotation.toRotationMatrix();
+    const double scale = 1.0 + std::abs(offset);
+    EXPECT_LT((r - reference.block<3, 3>(0, 0)).cwiseAbs().maxCoeff(), 1e-9) << "seed " << seed;
+    EXPECT_LT((fit.position - reference.block<3, 1>(0, 3)).cwiseAbs().maxCoeff(), 1e-9 * scale)
+        << "seed " << seed;
+  }
+}
+
 TEST(KabschTest, BadInputsThrowNamedValueErrors) {
   Points a(3, 3), b(2, 3);
   a.setRandom();
@@ -176,6 +200,15 @@ TEST(KabschTest, BadInputsThrowNamedValueErrors) {
   nan(1, 1) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(name_of([&] { fit_rigid_transform(nan, a); }), "source");
   EXPECT_EQ(name_of([&] { fit_rigid_transform(a, nan); }), "target");
+  Points inf = a;
+  inf(2, 0) = std::numeric_limits<double>::infinity();
+  inf(0, 0) = -std::numeric_limits<double>::infinity();
+  EXPECT_EQ(name_of([&] { fit_rigid_transform(inf, a); }), "source");
+  EXPECT_EQ(name_of([&] { fit_rigid_transform(a, inf); }), "target");
+  // Finite coordinates whose sums overflow: a clear error, not a pose of infinities.
+  Points huge(3, 3);
+  huge << 1.7e308, -1.7e308, 1.7e308, 1.7e308, 1.7e308, -1.7e308, 1.7e308, 1.0, 1.0;
+  EXPECT_EQ(name_of([&] { fit_rigid_transform(huge, huge); }), "source");
 }
 
 }  // namespace
