@@ -100,16 +100,6 @@ void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
   }
 }
 
-// Every row, ordered by its id and, within an id, ascending.
-std::vector<int32_t> rows_by_id(const std::vector<int32_t>& ids) {
-  std::vector<int32_t> order(ids.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int32_t>(i);
-  std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
-    return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
-  });
-  return order;
-}
-
 // True when the queries are the tree's own points, in its order (a same-level list).
 bool queries_are_indexed(const Points& query, const KdIndex& source) {
   if (query.rows() != source.size()) return false;
@@ -239,6 +229,28 @@ NeighborList all_rows(const Points& query, const KdIndex& source, int k) {
 }
 
 }  // namespace
+
+std::vector<int32_t> rows_by_id(const std::vector<int32_t>& ids) {
+  std::vector<int32_t> order(ids.size());
+  if (ids.empty()) return order;
+  const auto [lo, hi] = std::minmax_element(ids.begin(), ids.end());
+  const int64_t span = static_cast<int64_t>(*hi) - static_cast<int64_t>(*lo) + 1;
+  if (span > 2 * static_cast<int64_t>(ids.size()) + 1024) {
+    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int32_t>(i);
+    std::stable_sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+      return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
+    });
+    return order;
+  }
+  // Ids of a small range (an object's id is its index in the scene): a counting sort, stable.
+  std::vector<int32_t> first(static_cast<size_t>(span) + 1, 0);
+  for (const int32_t id : ids) ++first[static_cast<size_t>(id - *lo) + 1];
+  for (size_t b = 1; b < first.size(); ++b) first[b] += first[b - 1];
+  for (size_t i = 0; i < ids.size(); ++i) {
+    order[static_cast<size_t>(first[static_cast<size_t>(ids[i] - *lo)]++)] = static_cast<int32_t>(i);
+  }
+  return order;
+}
 
 int NeighborList::valid_count(Eigen::Index row) const {
   int n = 0;

@@ -24,6 +24,10 @@ struct NeighborList {
   int valid_count(Eigen::Index row) const;
 };
 
+/// Every row index of `ids`, ordered by id and, within an id, ascending (a stable sort by id;
+/// a counting sort when the ids span a range of at most about twice their number).
+std::vector<int32_t> rows_by_id(const std::vector<int32_t>& ids);
+
 /// Exact kd-trees over one set of source points, one per object id, built once and shared by every
 /// list whose sources are these points (same-object, other-object, cross-level queries).
 class ObjectIndex {

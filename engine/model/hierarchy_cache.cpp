@@ -27,13 +27,8 @@ constexpr int64_t kMinParallelRows = 256;
 // The query rows of each object id, in ascending row order, ordered by id.
 std::vector<std::pair<int32_t, std::vector<Eigen::Index>>> rows_by_object(
     const std::vector<int32_t>& ids) {
-  std::vector<Eigen::Index> order(ids.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
-  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
-    return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
-  });
   std::vector<std::pair<int32_t, std::vector<Eigen::Index>>> out;
-  for (const Eigen::Index row : order) {
+  for (const int32_t row : rows_by_id(ids)) {
     const int32_t id = ids[static_cast<size_t>(row)];
     if (out.empty() || out.back().first != id) out.push_back({id, {}});
     out.back().second.push_back(row);

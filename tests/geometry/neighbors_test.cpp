@@ -3,10 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
@@ -375,6 +378,27 @@ TEST(NeighborsTest, ListsDoNotDependOnTheThreadCount) {
   expect_equal(lists[1][1],
                brute_force_knn(c.points, c.ids, c.points, c.ids, 16, Relation::kOtherObject, 0.3),
                "other vs brute force");
+}
+
+TEST(NeighborsTest, RowsByIdEqualAStableSortByIdForNarrowAndWideIds) {
+  // Narrow ids take the counting sort, ids spread over a wide range the comparison sort; both
+  // must give every row once, by id, ascending within an id.
+  Rng rng(44);
+  const std::vector<std::pair<int64_t, int64_t>> ranges = {
+      {0, 7}, {-5, 5}, {1000, 1003}, {0, 0}, {-2147483647 - 1, 2147483647}, {0, 100000}};
+  for (const auto& [lo, hi] : ranges) {
+    for (const size_t n : {size_t{0}, size_t{1}, size_t{37}, size_t{3000}}) {
+      std::vector<int32_t> ids(n);
+      for (auto& id : ids) id = static_cast<int32_t>(rng.uniform_int(lo, hi));
+      if (n > 2) ids[n / 2] = static_cast<int32_t>(hi);
+      std::vector<int32_t> expected(n);
+      for (size_t i = 0; i < n; ++i) expected[i] = static_cast<int32_t>(i);
+      std::stable_sort(expected.begin(), expected.end(), [&](int32_t a, int32_t b) {
+        return ids[static_cast<size_t>(a)] < ids[static_cast<size_t>(b)];
+      });
+      EXPECT_EQ(rows_by_id(ids), expected) << "ids in [" << lo << ", " << hi << "], n " << n;
+    }
+  }
 }
 
 TEST(NeighborsTest, BadInputsThrowNamedValueErrors) {
