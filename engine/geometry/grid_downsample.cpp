@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <unordered_map>
+#include <vector>
 
 #include "engine/core/error.h"
 
@@ -32,11 +32,6 @@ struct VoxelKeyHash {
   }
 };
 
-struct Best {
-  double sq_dist;
-  int32_t index;
-};
-
 std::vector<int32_t> downsample(const Points& points, const std::vector<int32_t>* object_ids,
                                 double voxel) {
   if (!std::isfinite(voxel) || voxel <= 0.0) {
@@ -46,8 +41,15 @@ std::vector<int32_t> downsample(const Points& points, const std::vector<int32_t>
     throw ValueError("object_ids", "has " + std::to_string(object_ids->size()) + " entries for " +
                                        std::to_string(points.rows()) + " points");
   }
-  std::unordered_map<VoxelKey, Best, VoxelKeyHash> best;
-  best.reserve(static_cast<size_t>(points.rows()));
+  // Open addressing with linear probing in a table at most half full, holding each voxel's kept
+  // point (-1: empty); the points' keys and distances are stored once, per point.
+  const auto n = static_cast<size_t>(points.rows());
+  size_t capacity = 16;
+  while (capacity < 2 * n) capacity *= 2;
+  std::vector<int32_t> table(capacity, -1);
+  const size_t mask = capacity - 1;
+  std::vector<VoxelKey> keys(n);
+  std::vector<double> sq(n);
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     if (!points.row(i).allFinite()) {
       throw ValueError("points", "point " + std::to_string(i) + " is not finite");
@@ -61,20 +63,29 @@ std::vector<int32_t> downsample(const Points& points, const std::vector<int32_t>
     }
     const Eigen::RowVector3d centre = (cell.array() + 0.5) * voxel;
     const Eigen::RowVector3d d = points.row(i) - centre;
-    const double sq = d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
-    const VoxelKey key{object_ids != nullptr ? (*object_ids)[static_cast<size_t>(i)] : 0,
-                       static_cast<int64_t>(cell.x()), static_cast<int64_t>(cell.y()),
-                       static_cast<int64_t>(cell.z())};
     const auto index = static_cast<int32_t>(i);
-    auto [it, inserted] = best.try_emplace(key, Best{sq, index});
+    const VoxelKey& key = keys[static_cast<size_t>(i)] =
+        VoxelKey{object_ids != nullptr ? (*object_ids)[static_cast<size_t>(i)] : 0,
+                 static_cast<int64_t>(cell.x()), static_cast<int64_t>(cell.y()),
+                 static_cast<int64_t>(cell.z())};
+    sq[static_cast<size_t>(i)] = d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+    size_t h = VoxelKeyHash()(key) & mask;
+    while (table[h] >= 0 && !(keys[static_cast<size_t>(table[h])] == key)) h = (h + 1) & mask;
     // Points arrive in ascending index order, so keeping the first on equal distance keeps the
     // lowest index.
-    if (!inserted && sq < it->second.sq_dist) it->second = Best{sq, index};
+    if (table[h] < 0 || sq[static_cast<size_t>(i)] < sq[static_cast<size_t>(table[h])]) {
+      table[h] = index;
+    }
+  }
+  // Ascending: each voxel marks the point it keeps, then the marks are read in order.
+  std::vector<uint8_t> keep(n, 0);
+  for (const int32_t kept_point : table) {
+    if (kept_point >= 0) keep[static_cast<size_t>(kept_point)] = 1;
   }
   std::vector<int32_t> kept;
-  kept.reserve(best.size());
-  for (const auto& [key, b] : best) kept.push_back(b.index);
-  std::sort(kept.begin(), kept.end());
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (keep[i]) kept.push_back(static_cast<int32_t>(i));
+  }
   return kept;
 }
 

@@ -118,6 +118,20 @@ TEST(GridDownsampleTest, PerObjectNeverMixesObjects) {
   EXPECT_EQ(grid_downsample_per_object(q, q_ids, 0.5), brute_force(q, q_ids, 0.5));
 }
 
+TEST(GridDownsampleTest, CrowdedVoxelTablesEqualBruteForce) {
+  // Nearly one voxel per point, so the voxel table is close to half full and lookups probe past
+  // other voxels; ids of any sign, and voxels far from the origin.
+  Rng rng(12);
+  for (const double offset : {0.0, -3.0e6}) {
+    Points p = random_points(13, 5000, -1.0, 1.0);
+    p.array() += offset;
+    std::vector<int32_t> ids(5000);
+    for (auto& id : ids) id = static_cast<int32_t>(rng.uniform_int(-3, 3)) * 1000003;
+    EXPECT_EQ(grid_downsample_per_object(p, ids, 0.02), brute_force(p, ids, 0.02)) << offset;
+    EXPECT_EQ(grid_downsample(p, 0.01), brute_force(p, {}, 0.01)) << offset;
+  }
+}
+
 TEST(GridDownsampleTest, EmptyInputGivesEmptyOutput) {
   EXPECT_TRUE(grid_downsample(Points(0, 3), 0.1).empty());
   EXPECT_TRUE(grid_downsample_per_object(Points(0, 3), {}, 0.1).empty());
