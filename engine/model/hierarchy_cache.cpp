@@ -41,14 +41,21 @@ std::vector<std::pair<int32_t, std::vector<Eigen::Index>>> rows_by_object(
 std::pair<double, double> motion_bound(const Points& anchor, const Points& current) {
   const Pose motion = fit_rigid_transform(anchor, current);
   const Mat3 r = motion.rotation.toRotationMatrix();
-  double residual = 0.0;
-  for (Eigen::Index i = 0; i < anchor.rows(); ++i) {
-    const Vec3 a = anchor.row(i).transpose();
-    residual = std::max(residual, (r * a + motion.position - current.row(i).transpose()).norm());
+  const Vec3& t = motion.position;
+  // The largest residual (its square, one root at the end) and the largest coordinate, in one
+  // pass over both point sets.
+  double worst = 0.0, extent = t.cwiseAbs().maxCoeff();
+  const double* a = anchor.data();  // row-major x, y, z
+  const double* c = current.data();
+  for (Eigen::Index i = 0; i < anchor.rows(); ++i, a += 3, c += 3) {
+    const double ex = r(0, 0) * a[0] + r(0, 1) * a[1] + r(0, 2) * a[2] + t.x() - c[0];
+    const double ey = r(1, 0) * a[0] + r(1, 1) * a[1] + r(1, 2) * a[2] + t.y() - c[1];
+    const double ez = r(2, 0) * a[0] + r(2, 1) * a[1] + r(2, 2) * a[2] + t.z() - c[2];
+    worst = std::max(worst, ex * ex + ey * ey + ez * ez);
+    extent = std::max({extent, std::abs(a[0]), std::abs(a[1]), std::abs(a[2]), std::abs(c[0]),
+                       std::abs(c[1]), std::abs(c[2])});
   }
-  const double scale = 1.0 + std::max({anchor.cwiseAbs().maxCoeff(), current.cwiseAbs().maxCoeff(),
-                                       motion.position.cwiseAbs().maxCoeff()});
-  const double absolute = 2.0 * residual + kRoundingSlack * scale;
+  const double absolute = 2.0 * std::sqrt(worst) + kRoundingSlack * (1.0 + extent);
   const double relative = (r.transpose() * r - Mat3::Identity()).norm() + kRoundingSlack;
   if (!std::isfinite(absolute) || !std::isfinite(relative)) return {kInf, kInf};
   return {absolute, relative};
@@ -182,10 +189,10 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
         const Eigen::Index row = plan.rows[i];
         if (plan.mode == Mode::kReuse && plan.certified[i]) {
           const int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
-          for (int j = 0; j < std::min(k, entry.width); ++j) {
-            out.index(row, j) = global[static_cast<size_t>(stored[j])];
-            out.mask(row, j) = 1;
-          }
+          int32_t* index = out.index.data() + row * k;  // row-major rows of k
+          const int count = std::min(k, entry.width);
+          for (int j = 0; j < count; ++j) index[j] = global[static_cast<size_t>(stored[j])];
+          std::fill_n(out.mask.data() + row * k, count, uint8_t{1});
           continue;
         }
         for (int c = 0; c < 3; ++c) {
