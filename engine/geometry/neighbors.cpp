@@ -178,31 +178,65 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
   return out;
 }
 
+// Squared distance between two boxes, never above the computed squared_distance() of a point of
+// one to a point of the other (rounding is monotone; squared_distance()'s summation order).
+double squared_distance_between_boxes(const Aabb& a, const Aabb& b) {
+  const Vec3 d = (a.min - b.max).cwiseMax(b.min - a.max).cwiseMax(0.0);
+  return d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+}
+
 // The rows of knn_other_objects; inputs already checked.
 NeighborList other_object_rows(const Points& query, const std::vector<int32_t>& query_ids,
                                const ObjectIndex& source, int k, double radius) {
   NeighborList out = empty_list(query.rows(), k);
   const double sq_radius = radius * radius;
-  for_each_query(query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found,
-                                   std::vector<Neighbor>& merged) {
-    const Vec3 q = query.row(i).transpose();
-    const int32_t own = query_ids[static_cast<size_t>(i)];
-    merged.clear();
+  // Per query object, the other objects whose box is within the radius of its queries' box: the
+  // only ones any of its queries can reach (a scene's objects mostly touch one or two others).
+  const std::vector<int32_t> order = rows_by_id(query_ids);
+  std::vector<std::vector<const ObjectIndex::Object*>> reach;
+  std::vector<uint32_t> reach_of(order.size());  // each query row's entry of `reach`
+  for (size_t begin = 0; begin < order.size();) {
+    const int32_t own = query_ids[static_cast<size_t>(order[begin])];
+    size_t end = begin;
+    Aabb box;
+    for (; end < order.size() && query_ids[static_cast<size_t>(order[end])] == own; ++end) {
+      box.extend(Vec3(query.row(order[end]).transpose()));
+      reach_of[static_cast<size_t>(order[end])] = static_cast<uint32_t>(reach.size());
+    }
+    reach.emplace_back();
     for (const ObjectIndex::Object& object : source.objects()) {
-      // Rounding is monotone, so a point's computed squared distance is never below its box's:
-      // skipping boxes beyond the radius cannot lose a neighbour.
-      if (object.id == own || squared_distance_to_box(q, object.box) > sq_radius) continue;
-      // The exact k nearest of each other object within the radius contain the exact k nearest
-      // of their union.
-      object.tree.knn(q, k, found, sq_radius);
-      for (const Neighbor& n : found) {
-        merged.push_back({n.sq_dist, object.global[static_cast<size_t>(n.index)]});
+      if (object.id != own && squared_distance_between_boxes(box, object.box) <= sq_radius) {
+        reach.back().push_back(&object);
       }
     }
-    std::sort(merged.begin(), merged.end(), [](const Neighbor& a, const Neighbor& b) {
-      return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
-    });
-    if (merged.size() > static_cast<size_t>(k)) merged.resize(static_cast<size_t>(k));
+    begin = end;
+  }
+  for_each_query(query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found,
+                                   std::vector<Neighbor>& merged) {
+    const std::vector<const ObjectIndex::Object*>& near = reach[reach_of[static_cast<size_t>(i)]];
+    if (near.empty()) return;
+    const Vec3 q = query.row(i).transpose();
+    merged.clear();
+    size_t answering = 0;  // objects that contributed
+    for (const ObjectIndex::Object* object : near) {
+      // Rounding is monotone, so a point's computed squared distance is never below its box's:
+      // skipping boxes beyond the radius cannot lose a neighbour.
+      if (squared_distance_to_box(q, object->box) > sq_radius) continue;
+      // The exact k nearest of each other object within the radius contain the exact k nearest
+      // of their union.
+      object->tree.knn(q, k, found, sq_radius);
+      answering += found.empty() ? 0 : 1;
+      for (const Neighbor& n : found) {
+        merged.push_back({n.sq_dist, object->global[static_cast<size_t>(n.index)]});
+      }
+    }
+    // One object's answer is already in order (its local indices ascend with the source index).
+    if (answering > 1) {
+      std::sort(merged.begin(), merged.end(), [](const Neighbor& a, const Neighbor& b) {
+        return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
+      });
+      if (merged.size() > static_cast<size_t>(k)) merged.resize(static_cast<size_t>(k));
+    }
     write_row(out, i, merged, nullptr);
   });
   return out;
