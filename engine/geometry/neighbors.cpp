@@ -281,7 +281,8 @@ std::vector<int32_t> rows_by_id(const std::vector<int32_t>& ids) {
   for (const int32_t id : ids) ++first[static_cast<size_t>(id - *lo) + 1];
   for (size_t b = 1; b < first.size(); ++b) first[b] += first[b - 1];
   for (size_t i = 0; i < ids.size(); ++i) {
-    order[static_cast<size_t>(first[static_cast<size_t>(ids[i] - *lo)]++)] = static_cast<int32_t>(i);
+    int32_t& next = first[static_cast<size_t>(ids[i] - *lo)];
+    order[static_cast<size_t>(next++)] = static_cast<int32_t>(i);
   }
   return order;
 }
