@@ -100,6 +100,20 @@ void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
   }
 }
 
+// The runs of `order` (rows_by_id(ids)) that share an id: [begin, end) positions, by id.
+std::vector<std::pair<size_t, size_t>> id_runs(const std::vector<int32_t>& order,
+                                               const std::vector<int32_t>& ids) {
+  std::vector<std::pair<size_t, size_t>> runs;
+  for (size_t begin = 0; begin < order.size();) {
+    const int32_t id = ids[static_cast<size_t>(order[begin])];
+    size_t end = begin;
+    while (end < order.size() && ids[static_cast<size_t>(order[end])] == id) ++end;
+    runs.emplace_back(begin, end);
+    begin = end;
+  }
+  return runs;
+}
+
 // True when the queries are the tree's own points, in its order (a same-level list).
 bool queries_are_indexed(const Points& query, const KdIndex& source) {
   if (query.rows() != source.size()) return false;
@@ -195,13 +209,12 @@ NeighborList other_object_rows(const Points& query, const std::vector<int32_t>& 
   const std::vector<int32_t> order = rows_by_id(query_ids);
   std::vector<std::vector<const ObjectIndex::Object*>> reach;
   std::vector<uint32_t> reach_of(order.size());  // each query row's entry of `reach`
-  for (size_t begin = 0; begin < order.size();) {
+  for (const auto& [begin, end] : id_runs(order, query_ids)) {
     const int32_t own = query_ids[static_cast<size_t>(order[begin])];
-    size_t end = begin;
     Aabb box;
-    for (; end < order.size() && query_ids[static_cast<size_t>(order[end])] == own; ++end) {
-      box.extend(Vec3(query.row(order[end]).transpose()));
-      reach_of[static_cast<size_t>(order[end])] = static_cast<uint32_t>(reach.size());
+    for (size_t at = begin; at < end; ++at) {
+      box.extend(Vec3(query.row(order[at]).transpose()));
+      reach_of[static_cast<size_t>(order[at])] = static_cast<uint32_t>(reach.size());
     }
     reach.emplace_back();
     for (const ObjectIndex::Object& object : source.objects()) {
@@ -209,7 +222,6 @@ NeighborList other_object_rows(const Points& query, const std::vector<int32_t>& 
         reach.back().push_back(&object);
       }
     }
-    begin = end;
   }
   for_each_query(query.rows(), [&](Eigen::Index i, std::vector<Neighbor>& found,
                                    std::vector<Neighbor>& merged) {
@@ -299,14 +311,7 @@ ObjectIndex::ObjectIndex(const Points& points, const std::vector<int32_t>& ids)
   // Group by id with one sort instead of a map: local indices follow ascending global order, so
   // tie-breaking by local index equals tie-breaking by global index.
   const std::vector<int32_t> order = rows_by_id(ids);
-  std::vector<std::pair<size_t, size_t>> ranges;  // each object's run of `order`
-  for (size_t begin = 0; begin < order.size();) {
-    const int32_t id = ids[static_cast<size_t>(order[begin])];
-    size_t end = begin;
-    while (end < order.size() && ids[static_cast<size_t>(order[end])] == id) ++end;
-    ranges.emplace_back(begin, end);
-    begin = end;
-  }
+  const std::vector<std::pair<size_t, size_t>> ranges = id_runs(order, ids);  // per object
   // The objects' trees are independent: built on the compute threads like the queries
   // (for_each_group), each into its own slot, so the result does not depend on the thread count.
   // A tree's error (a coordinate beyond 1e18) is rethrown here, not inside the parallel region.
