@@ -12,6 +12,8 @@
 //
 // Hierarchy rows: build_hierarchy with the Physion preset (4 levels, voxel 0.075, radius 0.1,
 // K = 16) over points on 8 spheres of radius 0.1 in a row (as model_bench's make_state).
+// KnnOtherObjectsRigidSteps: the level-0 relational list (K = 16, radius 0.1) over the consecutive
+// rigid steps of model_bench's synthetic scene (tests/bench/bench_state.h), trees prebuilt.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -29,6 +31,7 @@
 #include "engine/geometry/surface_sampling.h"
 #include "engine/model/hierarchy.h"
 #include "engine/model/model_config.h"
+#include "tests/bench/bench_state.h"
 #include "tests/bench/legacy_neighbors.h"
 #include "tests/geometry/reference_neighbors.h"
 
@@ -133,6 +136,25 @@ void BM_KnnOtherObjects(benchmark::State& state) {
     benchmark::DoNotOptimize(knn_other_objects(c.points, c.ids, c.points, c.ids, kK, kRadius));
   }
   state.SetItemsProcessed(state.iterations() * c.points.rows());
+}
+
+// The level-0 relational list of a rollout's consecutive rigid steps (model_bench's synthetic
+// scene: eight spheres of radius 0.1 that turn and slide, two pairs through each other) over
+// each step's prebuilt trees, as build_hierarchy searches it.
+void BM_KnnOtherObjectsRigidSteps(benchmark::State& state) {
+  const std::vector<PointState> steps =
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), 16);
+  const ThreadScope threads(state);
+  std::vector<ObjectIndex> trees;
+  for (const PointState& s : steps) trees.emplace_back(s.position, s.object_ids);
+  size_t step = 0, rows = 0;
+  for (auto _ : state) {
+    const size_t i = step++ % steps.size();
+    benchmark::DoNotOptimize(
+        knn_other_objects(steps[i].position, steps[i].object_ids, trees[i], kK, kRadius));
+    rows += static_cast<size_t>(steps[i].position.rows());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(rows));
 }
 
 void BM_PclKnnOtherObjects(benchmark::State& state) {
@@ -340,6 +362,12 @@ BENCHMARK(BM_KnnSameObject)->Apply(library_args);
 BENCHMARK(BM_PclKnnSameObject)->Apply(serial_args);
 BENCHMARK(BM_BruteForceKnnSameObject_1000Queries)->Apply(serial_args);
 BENCHMARK(BM_KnnOtherObjects)->Apply(library_args);
+BENCHMARK(BM_KnnOtherObjectsRigidSteps)
+    ->Args({3000, 1})
+    ->Args({3000, 2})
+    ->ArgNames({"points", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_PclKnnOtherObjects)->Apply(serial_args);
 BENCHMARK(BM_BruteForceKnnOtherObjects_1000Queries)->Apply(serial_args);
 BENCHMARK(BM_BuildHierarchy)->Apply(hierarchy_args);
