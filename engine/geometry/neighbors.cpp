@@ -166,11 +166,8 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
   // object's index together (KdIndex::knn_rows).
   const std::vector<int32_t> order = rows_by_id(query_ids);
   std::vector<size_t> run_begin;
-  for (size_t i = 0; i < order.size(); ++i) {
-    if (run_begin.empty() || i - run_begin.back() == KdIndex::kBatchRows ||
-        query_ids[static_cast<size_t>(order[i])] != query_ids[static_cast<size_t>(order[i - 1])]) {
-      run_begin.push_back(i);
-    }
+  for (const auto& [begin, end] : id_runs(order, query_ids)) {
+    for (size_t at = begin; at < end; at += KdIndex::kBatchRows) run_begin.push_back(at);
   }
   run_begin.push_back(order.size());
   for_each_group(run_begin.size() - 1, query.rows(), [&](size_t r, std::vector<Neighbor>& found) {
