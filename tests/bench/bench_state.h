@@ -34,6 +34,9 @@ inline PointState make_bench_state(int n) {
   return PointState::from_positions(p, prev, prev2, ids);
 }
 
+/// Steps of a rollout the rigid-step benchmark rows cycle through.
+constexpr int kBenchRigidSteps = 16;
+
 /// `steps` consecutive states of make_bench_state(n)'s scene in which every sphere turns and slides
 /// as a rigid body (0.05 rad and up to 0.01 per frame), each point written as R·rest + t the way a
 /// rollout's rigid projection writes it: what a rollout's HierarchyCache sees.

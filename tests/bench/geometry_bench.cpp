@@ -138,14 +138,12 @@ void BM_KnnOtherObjects(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * c.points.rows());
 }
 
-constexpr int kRigidSteps = 16;  // as model_bench's rigid-step rows
-
 // The level-0 relational list of a rollout's consecutive rigid steps (model_bench's synthetic
 // scene: eight spheres of radius 0.1 that turn and slide, two pairs through each other) over
 // each step's prebuilt trees, as build_hierarchy searches it.
 void BM_KnnOtherObjectsRigidSteps(benchmark::State& state) {
   const std::vector<PointState> steps =
-      make_bench_rigid_steps(static_cast<int>(state.range(0)), kRigidSteps);
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), kBenchRigidSteps);
   const ThreadScope threads(state);
   std::vector<ObjectIndex> trees;
   for (const PointState& s : steps) trees.emplace_back(s.position, s.object_ids);

@@ -97,12 +97,10 @@ void rigid_step_args(benchmark::internal::Benchmark* b) {
   b->ArgNames({"points", "cache"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
-constexpr int kRigidSteps = 16;
-
 void BM_NeighbourSearchRigidSteps(benchmark::State& state) {
   set_torch_threads(bench_threads());
   const std::vector<PointState> steps =
-      make_bench_rigid_steps(static_cast<int>(state.range(0)), kRigidSteps);
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), kBenchRigidSteps);
   DynamicsModel model(config_for(0));
   HierarchyCache cache;
   HierarchyCache* use = state.range(1) ? &cache : nullptr;
@@ -235,7 +233,7 @@ BENCHMARK(BM_RolloutStep)->Apply(apply_impl_args);
 void BM_RolloutStepRigidSteps(benchmark::State& state) {
   set_torch_threads(bench_threads());
   const std::vector<PointState> steps =
-      make_bench_rigid_steps(static_cast<int>(state.range(0)), kRigidSteps);
+      make_bench_rigid_steps(static_cast<int>(state.range(0)), kBenchRigidSteps);
   DynamicsModel model(config_for(0));
   model->eval();
   HierarchyCache cache;
