@@ -5,11 +5,10 @@
 #include <array>
 #include <cmath>
 #include <exception>
-#include <omp.h>
 #include <string>
 
 #include "engine/core/error.h"
-#include "engine/core/threads.h"
+#include "engine/core/parallel.h"
 #include "engine/geometry/small_set_knn.h"
 
 namespace dynscope {
@@ -137,9 +136,7 @@ class RadiusResult {
 
 // Distance along one axis from `v` to the interval [lo, hi]: never above |v - p| as rounded for
 // any p in the interval (subtraction rounds monotonically).
-double axis_gap(double v, double lo, double hi) {
-  return std::max(0.0, std::max(lo - v, v - hi));
-}
+double axis_gap(double v, double lo, double hi) { return std::max(0.0, std::max(lo - v, v - hi)); }
 
 // A point during the build: coordinates and input index together, so splitting a cell moves one
 // contiguous record.
@@ -178,17 +175,16 @@ struct KdIndex::Tree {
     build(buffers, 0, 0, n, cells, levels, &parts);
     std::vector<std::vector<Cell>> built(parts.size());
     std::vector<std::exception_ptr> failed(parts.size());  // rethrown after the loop
-    const int threads = parts.size() > 1 && !omp_in_parallel() ? compute_threads() : 1;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (threads > 1)
-    for (size_t i = 0; i < parts.size(); ++i) {
+    parallel_chunks(static_cast<int64_t>(parts.size()), 1, true, [&](int64_t i, int64_t) {
       try {
-        const Part& part = parts[i];
-        built[i].reserve(2 * static_cast<size_t>(part.end - part.begin) / (kLeafSize / 2) + 2);
-        build(buffers, part.from, part.begin, part.end, built[i]);
+        const Part& part = parts[static_cast<size_t>(i)];
+        std::vector<Cell>& cells_of_part = built[static_cast<size_t>(i)];
+        cells_of_part.reserve(2 * static_cast<size_t>(part.end - part.begin) / (kLeafSize / 2) + 2);
+        build(buffers, part.from, part.begin, part.end, cells_of_part);
       } catch (...) {
-        failed[i] = std::current_exception();
+        failed[static_cast<size_t>(i)] = std::current_exception();
       }
-    }
+    });
     for (const std::exception_ptr& e : failed) {
       if (e) std::rethrow_exception(e);
     }
@@ -253,9 +249,9 @@ struct KdIndex::Tree {
       // may shrink as they are: the result checks each against its own).
       std::array<double, kLeafSize> d;
       const auto first = static_cast<uint32_t>(node.a);
-      uint32_t mask = leaf_candidates(&xyz[3 * static_cast<size_t>(first)],
-                                      static_cast<uint32_t>(node.b) - first, q, result.bound(),
-                                      d.data());
+      uint32_t mask =
+          leaf_candidates(&xyz[3 * static_cast<size_t>(first)],
+                          static_cast<uint32_t>(node.b) - first, q, result.bound(), d.data());
       while (mask != 0) {
         const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
         mask &= mask - 1;

@@ -11,7 +11,7 @@
 #include <utility>
 
 #include "engine/core/error.h"
-#include "engine/core/threads.h"
+#include "engine/core/parallel.h"
 
 namespace dynscope {
 namespace {
@@ -21,6 +21,8 @@ constexpr Eigen::Index kMinParallelQueries = 256;
 // Queries per scheduling chunk: large enough to amortise scheduling, small enough that a thread
 // slowed down by a busy core does not hold the others up.
 constexpr int kQueryChunk = 64;
+// Groups of queries (or trees) per scheduling chunk.
+constexpr int kGroupChunk = 4;
 
 void check_points(const Points& points, const std::vector<int32_t>* ids, const std::string& what) {
   if (ids != nullptr && static_cast<size_t>(points.rows()) != ids->size()) {
@@ -72,18 +74,16 @@ double squared_distance_to_box(const Vec3& p, const Aabb& box) {
   return d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
 }
 
-// Calls answer(row, found, merged) for every query row, in parallel over rows on the compute
-// threads. Each row is answered on its own with thread-private scratch, so the result does not
-// depend on the thread count or the schedule. `answer` must not throw (inputs are checked first).
+// Calls answer(row, found, merged) for every query row, in parallel over chunks of rows on the
+// compute threads (parallel_chunks). Each row is answered on its own with its thread's scratch
+// (a chunk runs on one thread without pause), so the result does not depend on the thread count
+// or the schedule. `answer` must not throw (inputs are checked first).
 template <typename Answer>
 void for_each_query(Eigen::Index rows, const Answer& answer) {
-  const int threads = rows >= kMinParallelQueries ? compute_threads() : 1;
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
+  parallel_chunks(rows, kQueryChunk, rows >= kMinParallelQueries, [&](int64_t begin, int64_t end) {
     std::vector<Neighbor> found, merged;
-#pragma omp for schedule(dynamic, kQueryChunk)
-    for (Eigen::Index i = 0; i < rows; ++i) answer(i, found, merged);
-  }
+    for (int64_t i = begin; i < end; ++i) answer(i, found, merged);
+  });
 }
 
 // Calls task(i, scratch) for i in 0 .. tasks - 1 (groups of queries answered together by
@@ -91,13 +91,11 @@ void for_each_query(Eigen::Index rows, const Answer& answer) {
 // `rows` >= kMinParallelQueries queries in all. Each group writes only its own rows.
 template <typename Task>
 void for_each_group(size_t tasks, Eigen::Index rows, const Task& task) {
-  const int threads = rows >= kMinParallelQueries ? compute_threads() : 1;
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-    std::vector<Neighbor> scratch;
-#pragma omp for schedule(dynamic, 4)
-    for (size_t i = 0; i < tasks; ++i) task(i, scratch);
-  }
+  parallel_chunks(static_cast<int64_t>(tasks), kGroupChunk, rows >= kMinParallelQueries,
+                  [&](int64_t begin, int64_t end) {
+                    thread_local std::vector<Neighbor> scratch;
+                    for (int64_t i = begin; i < end; ++i) task(static_cast<size_t>(i), scratch);
+                  });
 }
 
 // The runs of `order` (rows_by_id(ids)) that share an id: [begin, end) positions, by id.

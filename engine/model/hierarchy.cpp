@@ -4,8 +4,10 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.h"
+#include "engine/core/parallel.h"
 #include "engine/geometry/grid_downsample.h"
 
 namespace dynscope {
@@ -93,21 +95,14 @@ class LevelIndex {
   std::unique_ptr<KdIndex> all_;
 };
 
-}  // namespace
-
-Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
-                          const HierarchyOptions& options, HierarchyCache* cache) {
-  check_options(options);
-  if (points.rows() == 0) throw ValueError("points", "no points");
-  if (static_cast<Eigen::Index>(object_ids.size()) != points.rows()) {
-    throw ValueError("object_ids", "has " + std::to_string(object_ids.size()) + " entries for " +
-                                       std::to_string(points.rows()) + " points");
-  }
-  if (!points.allFinite()) throw ValueError("points", "non-finite position");
-
-  Hierarchy h;
-  h.grid_anchor = Vec3(points.col(0).minCoeff(), points.col(1).minCoeff(), 0.0);
-  h.levels.resize(static_cast<size_t>(options.levels));
+// The levels of `h`, from the finest up. Each level depends on the one before, but a level's
+// relational list only on its points and trees: it is started as a task (its error kept in
+// `errors`) that runs beside the rest of the chain when the compute threads are shared
+// (on_compute_threads); the caller waits for the tasks. `indices` receives each level's trees.
+void build_levels(const Points& points, const std::vector<int32_t>& object_ids,
+                  const HierarchyOptions& options, HierarchyCache* cache,
+                  std::vector<std::unique_ptr<LevelIndex>>& indices, TaskErrors& errors,
+                  Hierarchy& h) {
   // With a cache: the level-0 point each point of the current and the previous level is.
   const bool cached = cache != nullptr && options.object_centric;
   std::vector<int32_t> origin, prev_origin;
@@ -130,7 +125,17 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
       level.points = select_rows(prev.points, level.kept);
       level.object_ids = select_ids(prev.object_ids, level.kept);
     }
-    const auto index = std::make_unique<LevelIndex>(options, level);
+    indices[static_cast<size_t>(l)] = std::make_unique<LevelIndex>(options, level);
+    const LevelIndex* index = indices[static_cast<size_t>(l)].get();
+    if (options.object_centric && options.point_relational) {
+      // The task reads the level's points, ids and radius, which the chain no longer writes, and
+      // writes only the level's relational list.
+      HierarchyLevel* out = &level;
+      TaskErrors* task_errors = &errors;
+      const HierarchyOptions* o = &options;
+#pragma omp task firstprivate(out, task_errors, o, index)
+      task_errors->run([&] { out->relational = index->relational_list(*o, *out); });
+    }
     if (cached) {
       prev_origin = std::move(origin);
       origin.resize(level.object_ids.size());
@@ -158,10 +163,33 @@ Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& obje
                         : index->object_list(options, prev);
       level.same = select_list_rows(level.up, level.kept);
     }
-    if (options.object_centric && options.point_relational) {
-      level.relational = index->relational_list(options, level);
-    }
   }
+}
+
+}  // namespace
+
+Hierarchy build_hierarchy(const Points& points, const std::vector<int32_t>& object_ids,
+                          const HierarchyOptions& options, HierarchyCache* cache) {
+  check_options(options);
+  if (points.rows() == 0) throw ValueError("points", "no points");
+  if (static_cast<Eigen::Index>(object_ids.size()) != points.rows()) {
+    throw ValueError("object_ids", "has " + std::to_string(object_ids.size()) + " entries for " +
+                                       std::to_string(points.rows()) + " points");
+  }
+  if (!points.allFinite()) throw ValueError("points", "non-finite position");
+
+  Hierarchy h;
+  h.grid_anchor = Vec3(points.col(0).minCoeff(), points.col(1).minCoeff(), 0.0);
+  h.levels.resize(static_cast<size_t>(options.levels));
+  // The levels' trees, which the relational tasks read until they have all finished.
+  std::vector<std::unique_ptr<LevelIndex>> indices(static_cast<size_t>(options.levels));
+  TaskErrors errors;
+  on_compute_threads([&] {
+    errors.run([&] { build_levels(points, object_ids, options, cache, indices, errors, h); });
+    // Also after an error: the tasks read the levels and trees, which must outlive them.
+#pragma omp taskwait
+  });
+  errors.rethrow();
   return h;
 }
 

@@ -7,7 +7,7 @@
 #include <limits>
 #include <utility>
 
-#include "engine/core/threads.h"
+#include "engine/core/parallel.h"
 #include "engine/geometry/kabsch.h"
 
 namespace dynscope {
@@ -23,6 +23,8 @@ constexpr double kRoundingSlack = 1e-12;
 constexpr double kMaxUncertifiedFraction = 0.25;
 // Below this many rows a parallel region costs more than it saves.
 constexpr int64_t kMinParallelRows = 256;
+// Runs of rows per scheduling chunk.
+constexpr int64_t kRunChunk = 8;
 
 // The query rows of each object id, in ascending row order, ordered by id.
 std::vector<std::pair<int32_t, std::vector<Eigen::Index>>> rows_by_object(
@@ -169,14 +171,11 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
     total += static_cast<int64_t>(plans[p].rows.size());
   }
   const int64_t runs = offset.back();
-  const int threads = total >= kMinParallelRows ? compute_threads() : 1;
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-    std::vector<Neighbor> found;
+  parallel_chunks(runs, kRunChunk, total >= kMinParallelRows, [&](int64_t first, int64_t end_run) {
+    thread_local std::vector<Neighbor> found;  // a chunk runs on one thread without pause
     std::array<double, 3 * kRun> queries;
     std::array<size_t, kRun> searched;  // the run's rows that are searched
-#pragma omp for schedule(dynamic, 8)
-    for (int64_t r = 0; r < runs; ++r) {
+    for (int64_t r = first; r < end_run; ++r) {
       const auto p = static_cast<size_t>(std::upper_bound(offset.begin(), offset.end(), r) -
                                          offset.begin() - 1);
       const Plan& plan = plans[p];
@@ -227,7 +226,7 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
         entry.farthest[i] = last;
       }
     }
-  }
+  });
   previous = std::move(next);
   return out;
 }

@@ -127,7 +127,14 @@ TEST(HierarchyCacheTest, ThreadCountDoesNotChangeTheLists) {
     const Hierarchy a = build_hierarchy(p, rest.ids, options(), &one);
     set_compute_threads(2);
     const Hierarchy b = build_hierarchy(p, rest.ids, options(), &two);
-    EXPECT_EQ(a.levels[0].same.index, b.levels[0].same.index) << step;
+    for (int l = 0; l < a.num_levels(); ++l) {
+      for (const LevelList list : kLevelLists) {
+        const std::string name = std::to_string(step) + " " + level_list_path(l, list);
+        EXPECT_EQ(level_list(a.levels[l], list).index, level_list(b.levels[l], list).index)
+            << name;
+        EXPECT_EQ(level_list(a.levels[l], list).mask, level_list(b.levels[l], list).mask) << name;
+      }
+    }
   }
   set_compute_threads(saved);
   EXPECT_EQ(one.reused_rows(), two.reused_rows());

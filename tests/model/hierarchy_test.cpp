@@ -145,6 +145,26 @@ TEST(HierarchyTest, DoesNotDependOnTheThreadCount) {
   }
 }
 
+// An error part-way up the chain, with level 0's relational list already running beside it on
+// two threads, reaches the caller as the same error as on one: level 0 accepts a point at 1e17
+// (its trees take coordinates up to 1e18), level 1's voxel grid cannot index it.
+TEST(HierarchyTest, AnErrorPartWayUpReachesTheCallerOnAnyThreadCount) {
+  auto scene = make_scene(3, 400, 9);
+  scene.points(700, 0) = 1e17;
+  const int saved = compute_threads();
+  for (const int threads : {1, 2}) {
+    set_compute_threads(threads);
+    try {
+      build_hierarchy(scene.points, scene.ids, small_options());
+      ADD_FAILURE() << "no error on " << threads << " threads";
+    } catch (const ValueError& e) {
+      EXPECT_NE(std::string(e.what()).find("too far from the origin"), std::string::npos)
+          << e.what();
+    }
+  }
+  set_compute_threads(saved);
+}
+
 TEST(HierarchyTest, ObjectWithFewerThanKPointsIsMaskedNotPadded) {
   auto scene = make_scene(2, 60, 2);
   // A third object with 3 points.
