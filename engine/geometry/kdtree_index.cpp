@@ -136,8 +136,6 @@ class RadiusResult {
 
 // Distance along one axis from `v` to the interval [lo, hi]: never above |v - p| as rounded for
 // any p in the interval (subtraction rounds monotonically).
-double axis_gap(double v, double lo, double hi) { return std::max(0.0, std::max(lo - v, v - hi)); }
-
 // A point during the build: coordinates and input index together, so splitting a cell moves one
 // contiguous record.
 struct Slot {
@@ -204,26 +202,12 @@ struct KdIndex::Tree {
     }
   }
 
-  // Squared distance between two boxes. Rounding is monotone and the summation order is
-  // squared_distance()'s, so it is never above the computed distance of a point of one box to a
-  // point of the other: pruning with it cannot lose a neighbour.
+  // Squared distance between two cells, and between a point and a cell (squared_box_distance).
   static double box_distance(const Cell& a, const Cell& b) {
-    double s = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      const double gap = std::max(0.0, std::max(a.lo[d] - b.hi[d], b.lo[d] - a.hi[d]));
-      s += gap * gap;
-    }
-    return s;
+    return squared_box_distance(a.lo.data(), a.hi.data(), b.lo.data(), b.hi.data());
   }
-
-  // The same for one point and a box.
   static double point_box_distance(const double* p, const Cell& b) {
-    double s = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      const double gap = axis_gap(p[d], b.lo[d], b.hi[d]);
-      s += gap * gap;
-    }
-    return s;
+    return squared_box_distance(p, p, b.lo.data(), b.hi.data());
   }
 
   // What a search descends through: one cell in 32 bytes, the two planes of its split (the
@@ -277,7 +261,7 @@ struct KdIndex::Tree {
   void search(const double* q, Result& result) const {
     std::array<double, 3> gap2{};
     for (int d = 0; d < 3; ++d) {
-      const double g = axis_gap(q[d], cells[0].lo[d], cells[0].hi[d]);
+      const double g = axis_gap(q[d], q[d], cells[0].lo[d], cells[0].hi[d]);
       gap2[static_cast<size_t>(d)] = g * g;
     }
     if (gap2[0] + gap2[1] + gap2[2] <= result.bound()) descend(0, q, gap2, result);

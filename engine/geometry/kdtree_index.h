@@ -1,6 +1,7 @@
 // Exact double-precision nearest-neighbour and radius queries over a fixed point set.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -22,6 +23,25 @@ struct Neighbor {
 inline double squared_distance(const Vec3& a, const Vec3& b) {
   const double dx = a.x() - b.x(), dy = a.y() - b.y(), dz = a.z() - b.z();
   return dx * dx + dy * dy + dz * dz;
+}
+
+/// The gap between the intervals [a_lo, a_hi] and [b_lo, b_hi] on one axis (0 where they meet).
+inline double axis_gap(double a_lo, double a_hi, double b_lo, double b_hi) {
+  return std::max(0.0, std::max(a_lo - b_hi, b_lo - a_hi));
+}
+
+/// Squared distance between two axis-aligned boxes given by their corners (three coordinates
+/// each; a point is the box with both corners at it), summed in squared_distance()'s order.
+/// Rounding is monotone, so it is never above the computed squared_distance() of a point of one
+/// box to a point of the other: pruning with it cannot lose a neighbour.
+inline double squared_box_distance(const double* a_lo, const double* a_hi, const double* b_lo,
+                                   const double* b_hi) {
+  double s = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    const double gap = axis_gap(a_lo[d], a_hi[d], b_lo[d], b_hi[d]);
+    s += gap * gap;
+  }
+  return s;
 }
 
 /// Kd-tree over `[N,3]` points whose answers equal a brute-force search in double: distances are

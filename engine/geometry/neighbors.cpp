@@ -69,9 +69,7 @@ void write_row(NeighborList& out, Eigen::Index row, const std::vector<Neighbor>&
 }
 
 double squared_distance_to_box(const Vec3& p, const Aabb& box) {
-  const Vec3 d = (box.min - p).cwiseMax(p - box.max).cwiseMax(0.0);
-  // Same summation order as squared_distance, so the monotonicity argument below holds.
-  return d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+  return squared_box_distance(p.data(), p.data(), box.min.data(), box.max.data());
 }
 
 // Calls answer(row, found, merged) for every query row, in parallel over chunks of rows on the
@@ -187,11 +185,8 @@ NeighborList same_object_rows(const Points& query, const std::vector<int32_t>& q
   return out;
 }
 
-// Squared distance between two boxes, never above the computed squared_distance() of a point of
-// one to a point of the other (rounding is monotone; squared_distance()'s summation order).
 double squared_distance_between_boxes(const Aabb& a, const Aabb& b) {
-  const Vec3 d = (a.min - b.max).cwiseMax(b.min - a.max).cwiseMax(0.0);
-  return d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+  return squared_box_distance(a.min.data(), a.max.data(), b.min.data(), b.max.data());
 }
 
 // The rows of knn_other_objects; inputs already checked.
