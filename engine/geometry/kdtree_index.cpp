@@ -134,8 +134,6 @@ class RadiusResult {
   double bound_;
 };
 
-// Distance along one axis from `v` to the interval [lo, hi]: never above |v - p| as rounded for
-// any p in the interval (subtraction rounds monotonically).
 // A point during the build: coordinates and input index together, so splitting a cell moves one
 // contiguous record.
 struct Slot {

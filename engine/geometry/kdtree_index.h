@@ -25,7 +25,8 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
-/// The gap between the intervals [a_lo, a_hi] and [b_lo, b_hi] on one axis (0 where they meet).
+/// The gap between the intervals [a_lo, a_hi] and [b_lo, b_hi] on one axis (0 where they meet):
+/// never above |a − b| as rounded for any a and b in them (subtraction rounds monotonically).
 inline double axis_gap(double a_lo, double a_hi, double b_lo, double b_hi) {
   return std::max(0.0, std::max(a_lo - b_hi, b_lo - a_hi));
 }
