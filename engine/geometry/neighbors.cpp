@@ -73,9 +73,9 @@ double squared_distance_to_box(const Vec3& p, const Aabb& box) {
 }
 
 // Calls answer(row, found, merged) for every query row, in parallel over chunks of rows on the
-// compute threads (parallel_chunks). Each row is answered on its own with its thread's scratch
-// (a chunk runs on one thread without pause), so the result does not depend on the thread count
-// or the schedule. `answer` must not throw (inputs are checked first).
+// compute threads (parallel_chunks). Each row is answered on its own with its chunk's scratch,
+// so the result does not depend on the thread count or the schedule. `answer` must not throw
+// (inputs are checked first).
 template <typename Answer>
 void for_each_query(Eigen::Index rows, const Answer& answer) {
   parallel_chunks(rows, kQueryChunk, rows >= kMinParallelQueries, [&](int64_t begin, int64_t end) {
