@@ -58,6 +58,11 @@ void add_generate_command(CLI::App& app) {
       ->required();
   cmd->add_option("--jobs", args->jobs, "Worker threads (>= 1); does not change the results")
       ->capture_default_str();
+  cmd->add_option("--frame-rate", args->frame_rate_hz,
+                  "Stored frames per second (Hz), instead of the scenario's own: the same\n"
+                  "simulation over the same time, stored more or less densely (it must divide the\n"
+                  "240 Hz physics and the scenario's physics steps; e.g. 60 for the Physion-like\n"
+                  "scenes, stored at 30)");
   cmd->add_option("--meshes", args->meshes_dir,
                   "Directory of mesh files (OBJ, PLY, STL, glTF, ...) drawn as objects by movi-c");
   cmd->callback([args] { run_generate(*args); });

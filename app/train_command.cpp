@@ -114,6 +114,7 @@ void generate_missing_datasets(const TrainOptions& options) {
     g.scenario = d.scenario;
     g.count = d.count;
     g.seed = d.seed;
+    g.frame_rate_hz = d.frame_rate_hz;
     g.out_dir = d.out;
     g.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     std::printf("generating %lld %s scenes (seed %llu) into %s\n", static_cast<long long>(g.count),

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -43,7 +44,7 @@ std::vector<std::string> mesh_files_in(const std::string& dir) {
 }
 
 std::string manifest_text(const DatasetOptions& options, const std::vector<std::string>& mesh_files,
-                          const DatasetSummary& summary) {
+                          const SimSetup& first, const DatasetSummary& summary) {
   using nlohmann::json;
   json m;
   m["format"] = "dynscope-dataset";
@@ -53,6 +54,9 @@ std::string manifest_text(const DatasetOptions& options, const std::vector<std::
   m["seed"] = options.seed;
   m["seed_rule"] = "scene i uses derive_seed(seed, i) (engine/core/rng.h)";
   m["parameters"] = json::parse(scenario_parameters_json(options.scenario));
+  // The rate and frame count as stored (a --frame-rate replaces the scenario's own).
+  m["parameters"]["frame_rate_hz"] = first.physics_rate_hz / first.substeps_per_frame;
+  m["parameters"]["num_frames"] = first.num_frames;
   if (!mesh_files.empty()) m["meshes"] = mesh_files;
   const bool labelled = scenario_has_contact_label(options.scenario);
   if (labelled) {
@@ -117,6 +121,15 @@ void check_dataset_options(const DatasetOptions& options) {
   if (!scenario_needs_meshes(options.scenario) && !options.meshes_dir.empty()) {
     throw ValueError("meshes", "only the movi-c scenario uses meshes, not " + options.scenario);
   }
+  if (!(options.frame_rate_hz >= 0) || !std::isfinite(options.frame_rate_hz)) {
+    throw ValueError("frame_rate", "must be a positive rate in Hz (or 0: the scenario's own)");
+  }
+  if (options.frame_rate_hz != 0) {
+    // Whether the rate fits the scenario's physics steps (movi-c has movi-a's rates and frames).
+    SimSetup setup = scenario_setup(options.scenario == "movi-c" ? "movi-a" : options.scenario,
+                                    derive_seed(options.seed, 0));
+    set_frame_rate(setup, options.frame_rate_hz);
+  }
   if (options.out_dir.empty()) throw ValueError("out", "output directory is empty");
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
@@ -144,8 +157,10 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
       mesh_files.push_back(fs::path(f).filename().string());
     }
   }
+  scenario_options.frame_rate_hz = options.frame_rate_hz;
   // Building one setup up front reports scenario-specific input errors before any thread starts.
-  scenario_setup(options.scenario, derive_seed(options.seed, 0), scenario_options);
+  const SimSetup first =
+      scenario_setup(options.scenario, derive_seed(options.seed, 0), scenario_options);
 
   const bool labelled = scenario_has_contact_label(options.scenario);
   DatasetSummary summary;
@@ -197,7 +212,8 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
   if (error) std::rethrow_exception(error);
   summary.positives = positives;
   summary.manifest_path = (fs::path(options.out_dir) / kManifestName).string();
-  write_text_file_atomically(summary.manifest_path, manifest_text(options, mesh_files, summary));
+  write_text_file_atomically(summary.manifest_path,
+                             manifest_text(options, mesh_files, first, summary));
   log_debug("generate: wrote ", options.count, " scenes and ", summary.manifest_path);
   return summary;
 }

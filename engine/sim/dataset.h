@@ -12,12 +12,13 @@ namespace dynscope {
 
 /// What `dynscope generate` was asked for.
 struct DatasetOptions {
-  std::string scenario;    ///< One of scenario_names().
-  int64_t count = 0;       ///< Number of scenes, >= 1.
-  uint64_t seed = 0;       ///< Base seed; scene i uses derive_seed(seed, i).
-  std::string out_dir;     ///< Created if missing.
-  int jobs = 1;            ///< Worker threads, >= 1; results do not depend on it.
-  std::string meshes_dir;  ///< Mesh files for "movi-c"; must be empty for other scenarios.
+  std::string scenario;      ///< One of scenario_names().
+  int64_t count = 0;         ///< Number of scenes, >= 1.
+  uint64_t seed = 0;         ///< Base seed; scene i uses derive_seed(seed, i).
+  std::string out_dir;       ///< Created if missing.
+  int jobs = 1;              ///< Worker threads, >= 1; results do not depend on it.
+  std::string meshes_dir;    ///< Mesh files for "movi-c"; must be empty for other scenarios.
+  double frame_rate_hz = 0;  ///< Stored frames per second; 0: the scenario's own (set_frame_rate).
 };
 
 /// One written scene.
@@ -55,13 +56,15 @@ constexpr int kMaxDatasetJobs = 1024;
 std::vector<Mesh> load_mesh_dir(const std::string& dir);
 
 /// Checks every option before any work: known scenario, count >= 1, jobs >= 1, meshes only
-/// (and always) for "movi-c", and an output directory that can be created and written. Creates
-/// the output directory. Throws ValueError (bad option) or IoError (bad path) naming it.
+/// (and always) for "movi-c", a frame rate >= 0, and an output directory that can be created and
+/// written. Creates the output directory. Throws ValueError (bad option) or IoError (bad path)
+/// naming it.
 void check_dataset_options(const DatasetOptions& options);
 
 /// Generates `options.count` scenes on `options.jobs` threads, writes each to
 /// out_dir/scene_file_name() and then out_dir/manifest.json (scenario, count, base seed,
-/// per-file seed, split, outcome, generator parameters). The same options give identical files
+/// per-file seed, split, outcome, generator parameters, their frame rate and frame count as
+/// stored). The same options give identical files
 /// whatever `jobs` is. Reports each finished scene to `progress` if not null. Throws like
 /// check_dataset_options, or the first error a worker met (the files written so far remain).
 DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progress = nullptr);

@@ -78,8 +78,10 @@ std::string scenario_parameters_json(const std::string& scenario) {
   return p.dump();
 }
 
-SimSetup scenario_setup(const std::string& scenario, uint64_t seed,
-                        const ScenarioOptions& options) {
+namespace {
+
+SimSetup scenario_own_setup(const std::string& scenario, uint64_t seed,
+                            const ScenarioOptions& options) {
   const Entry& e = find_entry(scenario);
   if (e.make) return e.make(seed);
   if (scenario == "movi-c") {
@@ -99,6 +101,15 @@ SimSetup scenario_setup(const std::string& scenario, uint64_t seed,
     return sim::make_movi(seed, options.meshes);
   }
   return sim::make_movi(seed, {});
+}
+
+}  // namespace
+
+SimSetup scenario_setup(const std::string& scenario, uint64_t seed,
+                        const ScenarioOptions& options) {
+  SimSetup setup = scenario_own_setup(scenario, seed, options);
+  if (options.frame_rate_hz != 0.0) set_frame_rate(setup, options.frame_rate_hz);
+  return setup;
 }
 
 Scene generate_scene(const std::string& scenario, uint64_t seed) {

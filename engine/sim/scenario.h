@@ -14,6 +14,9 @@ namespace dynscope {
 struct ScenarioOptions {
   /// Object meshes for "movi-c" (any units; each is centred and normalised); unused elsewhere.
   std::vector<Mesh> meshes;
+  /// Stored frames per second; 0 keeps the scenario's own rate. Other rates store the same
+  /// simulation more or less densely (set_frame_rate).
+  double frame_rate_hz = 0.0;
 };
 
 /// Names of every scenario generate_scene() accepts ("movi-a", "movi-c", "drop", "collide", ...).
@@ -36,8 +39,8 @@ bool scenario_needs_meshes(const std::string& scenario);
 std::string scenario_parameters_json(const std::string& scenario);
 
 /// The Bullet setup (bodies, initial poses and velocities, rates) of one trial, before it is
-/// simulated. Throws ValueError for an unknown scenario (listing the known ones) or for
-/// "movi-c" without meshes.
+/// simulated. Throws ValueError for an unknown scenario (listing the known ones), for "movi-c"
+/// without meshes or for a frame rate that does not fit the scenario's physics steps.
 SimSetup scenario_setup(const std::string& scenario, uint64_t seed,
                         const ScenarioOptions& options = {});
 

@@ -55,6 +55,13 @@ struct SimSetup {
   double frame_dt_s() const { return substeps_per_frame / physics_rate_hz; }
 };
 
+/// Stores `setup`'s frames at `frame_rate_hz` instead, over the same simulated time and with the
+/// same physics steps: substeps_per_frame becomes physics_rate_hz / frame_rate_hz and num_frames
+/// grows or shrinks so that the last frame stays at the same time. The rate must divide the
+/// physics rate and the setup's physics steps (a scene at twice the rate is the same scene with
+/// one more frame between every two). Throws ValueError("frame_rate") naming the rates that fit.
+void set_frame_rate(SimSetup& setup, double frame_rate_hz);
+
 /// Rolls out `setup` with Bullet and records every body's pose at each stored frame. When one
 /// body has role target and one role zone, adds the label kContactLabel: frame 0 is 1 if they
 /// touch initially, frame f > 0 is 1 if they touched after any physics step in (f-1, f].

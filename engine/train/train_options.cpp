@@ -68,8 +68,10 @@ std::string TrainOptions::to_json() const {
   if (!datasets.empty()) {
     nlohmann::json list = nlohmann::json::array();
     for (const DatasetRecipe& d : datasets) {
-      list.push_back(
-          {{"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}});
+      nlohmann::json entry = {
+          {"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}};
+      if (d.frame_rate_hz != 0) entry["frame_rate_hz"] = d.frame_rate_hz;
+      list.push_back(entry);
     }
     j["datasets"] = list;
   }
@@ -117,7 +119,8 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
   if (!j.is_object()) throw FormatError(source, "recipe", "expected a JSON object");
   check_numbers(j, nlohmann::json::parse(TrainOptions().to_json()), source, "");
   if (j.contains("datasets") && j.at("datasets").is_array()) {
-    const nlohmann::json entry = {{"count", int64_t{1}}, {"seed", uint64_t{0}}};
+    const nlohmann::json entry = {
+        {"count", int64_t{1}}, {"seed", uint64_t{0}}, {"frame_rate_hz", 0.0}};
     for (size_t i = 0; i < j.at("datasets").size(); ++i) {
       const nlohmann::json& d = j.at("datasets").at(i);
       if (d.is_object()) check_numbers(d, entry, source, "datasets[" + std::to_string(i) + "].");
@@ -148,6 +151,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
         r.scenario = d.at("scenario").get<std::string>();
         r.count = d.at("count").get<int64_t>();
         r.seed = d.value("seed", uint64_t{0});
+        r.frame_rate_hz = d.value("frame_rate_hz", 0.0);
         o.datasets.push_back(r);
       }
     }

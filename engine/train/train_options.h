@@ -20,6 +20,7 @@ struct DatasetRecipe {
   std::string scenario;
   int64_t count = 0;
   uint64_t seed = 0;
+  double frame_rate_hz = 0;  ///< 0: the scenario's own (generate --frame-rate).
 };
 
 struct TrainOptions {

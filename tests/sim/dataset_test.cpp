@@ -145,6 +145,7 @@ TEST(Dataset, WritesScenesAndManifest) {
   EXPECT_EQ(m["count"], 10);
   EXPECT_EQ(m["seed"], 5);
   EXPECT_EQ(m["parameters"]["num_frames"], 60);
+  EXPECT_EQ(m["parameters"]["frame_rate_hz"], 30.0);
   ASSERT_EQ(m["files"].size(), 10u);
   EXPECT_EQ(m["split"]["train"].size(), 8u);
   EXPECT_EQ(m["split"]["val"][0], "support_0008.h5");
@@ -214,6 +215,12 @@ TEST(Dataset, BadOptionsFailBeforeAnyWork) {
   o = options;
   o.scenario = "movi-c";
   EXPECT_NE(message(o).find("needs --meshes"), std::string::npos) << message(o);
+  o = options;
+  o.frame_rate_hz = 70;
+  EXPECT_NE(message(o).find("frame_rate: 70 Hz does not divide"), std::string::npos) << message(o);
+  o.frame_rate_hz = -1;
+  EXPECT_NE(message(o).find("frame_rate: must be a positive rate"), std::string::npos)
+      << message(o);
   EXPECT_FALSE(fs::exists(options.out_dir)) << "nothing created for bad options";
 
   // An output path below a regular file can never be created (also when running as root).

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
 #include "engine/core/error.h"
@@ -66,6 +67,54 @@ TEST(Scenarios, SameSeedSameSceneOtherSeedOtherScene) {
     EXPECT_FALSE(same_scene(a, c)) << name;
     EXPECT_EQ(a.scenario, name);
     EXPECT_EQ(a.seed, 42u);
+  }
+}
+
+// Another frame rate stores the same simulation more or less densely over the same time.
+TEST(Scenarios, FrameRateStoresTheSameSimulationMoreDensely) {
+  for (const std::string& name : {std::string("collide"), std::string("link")}) {
+    const Scene own = generate_scene(name, 7);
+    ScenarioOptions options;
+    options.frame_rate_hz = 60.0;
+    const Scene dense = generate_scene(name, 7, options);
+    ASSERT_EQ(dense.num_frames(), 2 * (own.num_frames() - 1) + 1) << name;
+    EXPECT_DOUBLE_EQ(dense.dt_s, own.dt_s / 2) << name;
+    ASSERT_EQ(dense.objects.size(), own.objects.size());
+    for (size_t i = 0; i < own.objects.size(); ++i) {
+      for (int f = 0; f < own.num_frames(); ++f) {
+        const Pose &p = own.trajectories[i].poses[f], &q = dense.trajectories[i].poses[2 * f];
+        ASSERT_EQ(p.position, q.position) << name << " object " << i << " frame " << f;
+        ASSERT_EQ(p.rotation.coeffs(), q.rotation.coeffs()) << name << " frame " << f;
+      }
+    }
+    // The label covers every physics step either way, so the outcome is the same.
+    EXPECT_EQ(contact_outcome(dense), contact_outcome(own)) << name;
+    const std::vector<double>& sparse = own.labels.at(kContactLabel);
+    const std::vector<double>& fine = dense.labels.at(kContactLabel);
+    for (int f = 1; f < own.num_frames(); ++f) {
+      EXPECT_EQ(sparse[f], std::max(fine[2 * f - 1], fine[2 * f])) << name << " frame " << f;
+    }
+  }
+  // 120 Hz: two physics steps per frame over collide's 472 (59 frames after the first of 30 Hz).
+  ScenarioOptions fast;
+  fast.frame_rate_hz = 120.0;
+  EXPECT_EQ(scenario_setup("collide", 7, fast).num_frames, 237);
+  EXPECT_EQ(scenario_setup("collide", 7, fast).substeps_per_frame, 2);
+}
+
+// 15 Hz would need 16 physics steps per frame, which 472 is not a multiple of.
+TEST(Scenarios, FrameRateThatDoesNotFitNamesTheRatesThatDo) {
+  ScenarioOptions options;
+  for (const double bad : {70.0, 45.0, 15.0, 480.0, -30.0}) {
+    options.frame_rate_hz = bad;
+    try {
+      scenario_setup("collide", 7, options);
+      ADD_FAILURE() << bad << " Hz was accepted";
+    } catch (const ValueError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("frame_rate"), std::string::npos) << message;
+      EXPECT_NE(message.find("rates that fit: 240, 120, 60, 30)"), std::string::npos) << message;
+    }
   }
 }
 

@@ -172,7 +172,11 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
       {"description", "tiny"},
       {"datasets",
        {{{"out", data + "/drop"}, {"scenario", "drop"}, {"count", 10}, {"seed", 4}},
-        {{"out", data + "/roll"}, {"scenario", "roll"}, {"count", 10}, {"seed", 4}}}},
+        {{"out", data + "/roll"},
+         {"scenario", "roll"},
+         {"count", 10},
+         {"seed", 4},
+         {"frame_rate_hz", 60}}}},
       {"data", {data + "/drop", data + "/roll"}},
       {"out", (dir / "a.pt").string()},
       {"log", (dir / "logs" / "train" / "a.csv").string()},
@@ -192,6 +196,11 @@ TEST(CliEndToEndTest, RecipeGeneratesItsDatasetsAndIsReproducible) {
   ASSERT_EQ(run("train --recipe " + recipe), 0);
   EXPECT_TRUE(fs::exists(fs::path(data) / "drop" / "manifest.json"));
   EXPECT_TRUE(fs::exists(fs::path(data) / "roll" / "manifest.json"));
+  // The roll scenes are stored at 60 Hz instead of 30: 179 frames instead of 90.
+  const nlohmann::json roll =
+      nlohmann::json::parse(std::ifstream(fs::path(data) / "roll" / "manifest.json"));
+  EXPECT_EQ(roll.at("parameters").at("frame_rate_hz"), 60.0);
+  EXPECT_EQ(roll.at("parameters").at("num_frames"), 179);
   EXPECT_TRUE(fs::exists(dir / "logs" / "train" / "a.csv")) << "the log's directories are made";
   // The written recipe keeps datasets and notes; running it again gives the same weights.
   const std::string again = (dir / "b.pt").string();
