@@ -57,7 +57,7 @@ esac
 data=()
 for s in "${scenarios[@]}"; do data+=(--data "$root/$s"); done
 # The shipped recipe's three seeds, the paper's architecture, the static-bodies-held variant, the
-# level-0 radius of 0.15 and the 60-epoch schedule (skipped while it trains).
+# level-0 radius of 0.15 and the 60-epoch schedule.
 evaluate_and_compare assets/recipes/physion-600 "${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}" \
   "${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}" "$split" "centred paper held radius15 long60" \
   "${data[@]}" --split "$eval_split"
