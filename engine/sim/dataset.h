@@ -64,9 +64,9 @@ void check_dataset_options(const DatasetOptions& options);
 /// Generates `options.count` scenes on `options.jobs` threads, writes each to
 /// out_dir/scene_file_name() and then out_dir/manifest.json (scenario, count, base seed,
 /// per-file seed, split, outcome, generator parameters, their frame rate and frame count as
-/// stored). The same options give identical files
-/// whatever `jobs` is. Reports each finished scene to `progress` if not null. Throws like
-/// check_dataset_options, or the first error a worker met (the files written so far remain).
+/// stored). The same options give identical files whatever `jobs` is. Reports each finished scene
+/// to `progress` if not null. Throws like check_dataset_options, or the first error a worker met
+/// (the files written so far remain).
 DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progress = nullptr);
 
 }  // namespace dynscope
