@@ -29,7 +29,7 @@ struct TrainArgs {
   std::vector<std::string> data;
   std::string out, model, target, input, faces, scale, log, lr_schedule, noise_mode;
   int epochs = 0, samples = 0, batch = 0, threads = 0, checkpoint_every = 0, width = 0, levels = 0,
-      bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0;
+      bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0, pushforward = 0;
   int64_t max_steps = 0;
   double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
@@ -70,6 +70,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--keep-epochs")) o.keep_epochs = a.keep_epochs;
   if (given(a, "--hold-static")) o.model.hold_static = a.hold_static;
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
+  if (given(a, "--pushforward")) o.pushforward_steps = a.pushforward;
   if (given(a, "--seed")) o.seed = a.seed;
   if (given(a, "--width")) o.model.width = a.width;
   if (given(a, "--levels")) o.model.levels = a.levels;
@@ -229,6 +230,10 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--huber-delta", a->huber_delta,
                   "Huber loss transition in target-std units (default 1; 1000 makes it a squared "
                   "error for any realistic error, as the paper's loss in scene units is)");
+  cmd->add_option("--pushforward", a->pushforward,
+                  "Frames the model pushes each example forward before its loss (default 0): it "
+                  "predicts them without gradient as a rollout does, from the drawn noisy state, "
+                  "and learns the next step from the state it reached itself");
   cmd->add_option("--threads", a->threads, "LibTorch threads (0: default)");
   cmd->add_flag("--resume", a->resume, "Continue from --out and its .state file exactly");
   cmd->add_option("--log", a->log, "CSV log, one row per step");

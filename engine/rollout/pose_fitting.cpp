@@ -26,6 +26,17 @@ RigidProjector::RigidProjector(const ScenePointCloud& cloud, const std::vector<u
   }
 }
 
+namespace {
+std::vector<uint8_t> rigid_flags(const Scene& scene) {
+  std::vector<uint8_t> rigid;
+  for (const Object& o : scene.objects) rigid.push_back(o.rigid ? 1 : 0);
+  return rigid;
+}
+}  // namespace
+
+RigidProjector::RigidProjector(const ScenePointCloud& cloud, const Scene& scene)
+    : RigidProjector(cloud, rigid_flags(scene)) {}
+
 Points RigidProjector::project(const Points& predicted, std::vector<Pose>* poses) const {
   if (predicted.rows() != size_) {
     throw ValueError("predicted", "has " + std::to_string(predicted.rows()) + " points, expected " +

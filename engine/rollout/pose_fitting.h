@@ -6,6 +6,7 @@
 
 #include "engine/core/types.h"
 #include "engine/geometry/point_cloud.h"
+#include "engine/scene/scene.h"
 
 namespace dynscope {
 
@@ -17,6 +18,8 @@ class RigidProjector {
   /// `cloud` gives every point's object index and rest coordinate; `rigid` `[O]` flags objects
   /// (indexed like Scene::objects). Throws ValueError if a point's object index is outside `rigid`.
   RigidProjector(const ScenePointCloud& cloud, const std::vector<uint8_t>& rigid);
+  /// The projector of a scene's rollouts: its objects' own rigid flags (Object::rigid).
+  RigidProjector(const ScenePointCloud& cloud, const Scene& scene);
 
   /// Returns the projected points `[N,3]` for `predicted` `[N,3]` (world frame) and writes one
   /// pose per object into `poses` when given (identity for non-rigid objects or objects without

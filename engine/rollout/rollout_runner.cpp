@@ -29,7 +29,7 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
     r.pose_object_ids.push_back(o.id);
   }
   r.pose_rigid = rigid;
-  const RigidProjector projector(cloud, rigid);
+  const RigidProjector projector(cloud, scene);
   const std::vector<uint8_t> static_points = cloud.static_mask(scene);
 
   r.scenario = scene.scenario;

@@ -95,6 +95,7 @@ std::string TrainOptions::to_json() const {
   j["noise_std"] = noise_std;
   j["noise_mode"] = noise_mode;
   j["huber_delta"] = huber_delta;
+  j["pushforward_steps"] = pushforward_steps;
   j["max_steps"] = max_steps;
   j["checkpoint_every"] = checkpoint_every;
   j["val_scenes"] = val_scenes;
@@ -196,6 +197,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     get("noise_mode", o.noise_mode);
     get("keep_epochs", o.keep_epochs);
     get("huber_delta", o.huber_delta);
+    get("pushforward_steps", o.pushforward_steps);
     get("max_steps", o.max_steps);
     get("checkpoint_every", o.checkpoint_every);
     get("val_scenes", o.val_scenes);
@@ -253,6 +255,7 @@ void TrainOptions::resolve(const std::string& scenario) {
   }
   in_range("huber-delta", huber_delta, 0, 1e6, true);
   in_range("checkpoint-every", checkpoint_every, 1, 1e9, false);
+  in_range("pushforward-steps", pushforward_steps, 0, 1e6, false);
   in_range("val-frames", val_frames, 1, 1e6, false);
   in_range("noise-std", noise_std, 0, 1e3, false);
   parse_noise_mode(noise_mode);  // throws ValueError("noise-mode", ...) for other names

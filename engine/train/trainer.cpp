@@ -29,6 +29,7 @@
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/dataset_split.h"
 #include "engine/rollout/model_predictor.h"
+#include "engine/rollout/pose_fitting.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/train/adam_step.h"
 #include "engine/train/point_loss.h"
@@ -51,8 +52,9 @@ struct SceneData {
   Scene scene;
   ModelPoints points;
   std::vector<Points> frames;
-  std::vector<uint8_t> static_points;  // ScenePointCloud::static_mask
-  int64_t moving_points = 0;           // points not in static_points
+  std::vector<uint8_t> static_points;         // ScenePointCloud::static_mask
+  int64_t moving_points = 0;                  // points not in static_points
+  std::unique_ptr<RigidProjector> projector;  // the rigid projection of the scene's rollouts
 
   // The points a model's loss counts in this scene: the moving ones where it holds static bodies.
   int64_t loss_points(const ModelConfig& c) const {
@@ -72,6 +74,7 @@ SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
   for (int f = 0; f < d.scene.num_frames(); ++f) d.frames.push_back(d.points.positions(d.scene, f));
   d.static_points = d.points.cloud.static_mask(d.scene);
   for (const uint8_t s : d.static_points) d.moving_points += s == 0 ? 1 : 0;
+  d.projector = std::make_unique<RigidProjector>(d.points.cloud, d.scene);
   return d;
 }
 
@@ -79,10 +82,14 @@ SceneData load_scene(const std::string& path, const SamplingOptions& sampling) {
 struct Example {
   PointState state;
   Points next;
+  const SceneData* scene = nullptr;
+  int frame = 0;  // t
 };
 
 Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng) {
   Example e;
+  e.scene = &d;
+  e.frame = t;
   const Points& p2 = d.frames[static_cast<size_t>(t - 2)];
   const Points& p1 = d.frames[static_cast<size_t>(t - 1)];
   const Points& p0 = d.frames[static_cast<size_t>(t)];
@@ -111,8 +118,9 @@ struct PreparedBatch {
   // float32 [P,1], 0 for the static points of a model that holds them; else undefined.
   torch::Tensor moving;
   int64_t points = 0;
-  int64_t global_points = 0;  // points of the whole step over all ranks (normalises the loss)
-  bool empty = false;         // this rank has no example in the step (end of an epoch)
+  int64_t global_points = 0;      // points of the whole step over all ranks (normalises the loss)
+  bool empty = false;             // this rank has no example in the step (end of an epoch)
+  std::vector<Example> examples;  // kept for pushing forward (TrainOptions::pushforward_steps)
 };
 
 // Builds every example's hierarchy and tensors. Reads only the model's configuration, so it may
@@ -150,6 +158,37 @@ PreparedBatch prepare_batch(const DynamicsModelImpl& model, const std::vector<Ex
 torch::Tensor batch_loss(DynamicsModel& model, const PreparedBatch& b, double delta) {
   return point_loss_sum(model->predict_positions(b.input), b.truth, model->stats().target_std,
                         delta, b.moving);
+}
+
+// Replaces every example of `b` by the state the model itself reaches from it one step later,
+// as a rollout does (the prediction without gradient, held static points, rigid projection),
+// with the true positions of that later frame as its target; then prepares the batch again.
+void push_forward(DynamicsModel& model, PreparedBatch& b) {
+  torch::Tensor delta;
+  {
+    torch::NoGradGuard no_grad;
+    delta = model->predict_delta(b.input);
+    if (b.moving.defined()) delta = delta * b.moving.to(delta.dtype());
+    delta = delta.to(torch::kCPU, torch::kDouble).contiguous();
+  }
+  Eigen::Index offset = 0;
+  for (Example& e : b.examples) {
+    const Eigen::Index n = e.state.size();
+    const Points raw =
+        e.state.position + Eigen::Map<const Points>(delta.data_ptr<double>() + 3 * offset, n, 3);
+    offset += n;
+    Points reached = e.scene->projector->project(raw);
+    e.state.prev_velocity = std::move(e.state.velocity);
+    e.state.velocity = reached - e.state.position;
+    e.state.position = std::move(reached);
+    ++e.frame;
+    e.next = e.scene->frames[static_cast<size_t>(e.frame + 1)];
+  }
+  const int64_t global_points = b.global_points;
+  std::vector<Example> examples = std::move(b.examples);
+  b = prepare_batch(*model, examples);
+  b.global_points = global_points;
+  b.examples = std::move(examples);
 }
 
 // Prepares the next batch on a thread of its own while the current step runs on this one.
@@ -302,6 +341,14 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     }
     if (!any) break;
   }
+  for (const SceneData& d : train) {
+    if (static_cast<int>(d.frames.size()) < 4 + o.pushforward_steps) {
+      throw ValueError("pushforward-steps",
+                       d.path + " has " + std::to_string(d.frames.size()) + " frames; pushing " +
+                           std::to_string(o.pushforward_steps) + " forward needs at least " +
+                           std::to_string(4 + o.pushforward_steps));
+    }
+  }
   if (val.empty() && leader) {
     log_warn(o.data_dirs.front(),
              ": the validation split is empty (or --val-scenes 0); validation is skipped");
@@ -390,8 +437,11 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
       const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
       global_points += d.loss_points(model->config());
       if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
-      const int t = static_cast<int>(rng.uniform_int(2, static_cast<int64_t>(d.frames.size()) - 2));
-      Example e = make_example(d, t, o, &rng);
+      // With pushing forward, the drawn frame is where the loss is taken and the example starts
+      // that many frames earlier.
+      const int t = static_cast<int>(
+          rng.uniform_int(2 + o.pushforward_steps, static_cast<int64_t>(d.frames.size()) - 2));
+      Example e = make_example(d, t - o.pushforward_steps, o, &rng);
       if (b >= mine) examples.push_back(std::move(e));
     }
     PreparedBatch batch;
@@ -399,6 +449,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
       batch.empty = true;
     } else {
       batch = prepare_batch(*model, examples);
+      if (o.pushforward_steps > 0) batch.examples = std::move(examples);
     }
     batch.global_points = global_points;
     return batch;
@@ -430,7 +481,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     prefetch.start([&step_batch, s = step, ord = order_for(step)] { return step_batch(s, ord); });
   }
   while (step < total) {
-    const PreparedBatch batch = prefetch.take();
+    PreparedBatch batch = prefetch.take();
     if (step + 1 < total) {
       prefetch.start(
           [&step_batch, s = step + 1, ord = order_for(step + 1)] { return step_batch(s, ord); });
@@ -438,6 +489,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     model->train();
     optimizer.zero_grad();
     const auto step_start = std::chrono::steady_clock::now();
+    for (int i = 0; i < o.pushforward_steps && !batch.empty; ++i) push_forward(model, batch);
     // Normalised by the points of the whole step (all ranks), so summed gradients are the mean.
     torch::Tensor loss =
         batch.empty ? torch::zeros({}, torch::kFloat)

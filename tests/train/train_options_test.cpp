@@ -46,6 +46,7 @@ TEST(TrainOptions, IntegerFieldsRefuseFractionsSignsAndOverflow) {
              "seed: must be an integer in [0, 18446744073709551615]");
   expect_has(parse_error(R"({"sampling": {"seed": -3}})"), "sampling.seed");
   expect_has(parse_error(R"({"batch": 4294967297})"), "batch: must be an integer");
+  expect_has(parse_error(R"({"pushforward_steps": -1})"), "pushforward_steps: must be an integer");
   expect_has(parse_error(R"({"datasets": [{"out": "d", "scenario": "drop", "count": 1.5}]})"),
              "datasets[0].count");
   expect_has(parse_error(R"({"model_config": {"width": 0}})"), "width: must be >= 1");

@@ -16,6 +16,7 @@
 #include "engine/core/rng.h"
 #include "engine/io/scene_file.h"
 #include "engine/model/checkpoint.h"
+#include "engine/rollout/pose_fitting.h"
 #include "engine/rollout/rollout_runner.h"
 #include "engine/sim/dataset.h"
 #include "engine/train/point_loss.h"
@@ -291,6 +292,106 @@ TEST(TrainerTest, AHoldStaticRunKeepsStaticBodiesPutInItsRollouts) {
   fs::remove_all(dir);
 }
 
+// Pushing forward (TrainOptions::pushforward_steps): the loss of a step is taken at the state the
+// model reached itself, one rollout step from the drawn one. One training scene of five frames
+// leaves a single frame to draw (t = 3, the example starting at t = 2), and a learning rate far
+// below float precision leaves the saved weights at their initial values, so the first step's
+// loss can be recomputed: the checkpoint's prediction from frames 0-2, rigidly projected as in a
+// rollout, then its prediction against the true frame 4.
+TEST(TrainerTest, PushingForwardTakesTheLossAtTheModelsOwnNextState) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_push_" + std::to_string(getpid()));
+  fs::create_directories(dir / "data");
+  std::string source;
+  for (const auto& entry : fs::directory_iterator(dataset_dir())) {
+    if (entry.path().extension() == ".h5") source = entry.path().string();
+  }
+  ASSERT_FALSE(source.empty());
+  Scene scene = read_scene(source);
+  for (Trajectory& t : scene.trajectories) t.poses.resize(5);
+  for (auto& [name, label] : scene.labels) label.resize(5);
+  write_scene(scene, (dir / "data" / "short.h5").string());
+  {
+    std::ofstream manifest(dir / "data" / "manifest.json");
+    manifest << R"({"scenario":"drop","split":{"train":["short.h5"],"val":[],"test":[]}})";
+  }
+  auto options = [&](const std::string& name, int push) {
+    TrainOptions o = testing::tiny_train_options((dir / "data").string(), (dir / name).string());
+    o.seed = 3;
+    o.noise_std = 0;
+    o.lr = 1e-30;
+    o.max_steps = 1;
+    o.pushforward_steps = push;
+    return o;
+  };
+  const TrainOptions pushed = options("pushed.pt", 1);
+  const TrainResult r = train_model(pushed);
+  ASSERT_EQ(r.losses.size(), 1u);
+
+  DynamicsModel model = load_checkpoint(pushed.out);
+  const ModelPoints points = build_model_points(scene, pushed.sampling);
+  std::vector<Points> frames;
+  for (int f = 0; f < 5; ++f) frames.push_back(points.positions(scene, f));
+  auto loss_at = [&](const PointState& state, const Points& truth) {
+    torch::NoGradGuard no_grad;
+    const ModelInput input = make_model_input(state, model->build_hierarchy(state));
+    return point_loss_sum(model->predict_positions(input), points_to_tensor(truth),
+                          model->stats().target_std, pushed.huber_delta, torch::Tensor())
+               .item<double>() /
+           static_cast<double>(state.size() * 3);
+  };
+  auto state_of = [&](const Points& p0, const Points& p1, const Points& p2) {
+    PointState s = PointState::from_positions(p0, p1, p2, points.cloud.object_id);
+    s.static_points = points.cloud.static_mask(scene);
+    return s;
+  };
+  const PointState start = state_of(frames[2], frames[1], frames[0]);
+  const Points reached = RigidProjector(points.cloud, scene).project(model->predict_next(start));
+  const double own = loss_at(state_of(reached, frames[2], frames[1]), frames[4]);
+  const double truth = loss_at(state_of(frames[3], frames[2], frames[1]), frames[4]);
+  EXPECT_NEAR(r.losses[0], own, 1e-6 * own);
+  EXPECT_GT(std::abs(truth - own), 1e-3 * own) << "the model's own state differs from the truth";
+
+  // The same step without pushing forward is taken at a true state (t = 2 or 3).
+  const TrainResult plain = train_model(options("plain.pt", 0));
+  const double at2 = loss_at(state_of(frames[2], frames[1], frames[0]), frames[3]);
+  EXPECT_TRUE(std::abs(plain.losses[0] - truth) < 1e-6 * truth ||
+              std::abs(plain.losses[0] - at2) < 1e-6 * at2);
+
+  // A scene too short to push forward is named.
+  try {
+    train_model(options("long.pt", 2));
+    FAIL() << "pushing 2 frames forward needs 6 frames";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("short.h5 has 5 frames"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+// A pushed-forward run continues exactly from its checkpoint, as every run does.
+TEST(TrainerTest, APushedForwardRunResumesExactly) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("dynscope_train_test_push_resume_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  TrainOptions straight = tiny_options((dir / "straight.pt").string());
+  straight.pushforward_steps = 2;
+  straight.max_steps = 4;
+  train_model(straight);
+  TrainOptions first = straight;
+  first.out = (dir / "resumed.pt").string();
+  first.max_steps = 2;
+  train_model(first);
+  TrainOptions second = first;
+  second.max_steps = 4;
+  second.resume = true;
+  EXPECT_EQ(train_model(second).start_step, 2);
+  expect_same_weights(straight.out, second.out);
+  EXPECT_EQ(TrainOptions::from_json(read_text_file(recipe_path(second.out)), second.out)
+                .pushforward_steps,
+            2);
+  fs::remove_all(dir);
+}
+
 TEST(TrainerTest, VelocityNoisePerPointPerObjectAndCentred) {
   const double sigma = 0.01;
   const int n = 4000;
@@ -354,6 +455,7 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   TrainOptions o = tiny_options("x.pt");
   o.model.kind = ModelKind::kGnn;
   o.noise_std = 0.002;
+  o.pushforward_steps = 2;
   o.data_dirs.push_back("other");
   o.description = "a test recipe";
   o.datasets = {{"data/drop", "drop", 10, 5, 0.0}, {"other", "collide", 20, 6, 60.0}};
@@ -361,6 +463,7 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   const TrainOptions back = TrainOptions::from_json(o.to_json(), "recipe.json");
   EXPECT_EQ(back.to_json(), o.to_json());
   EXPECT_EQ(back.data_dirs, o.data_dirs);
+  EXPECT_EQ(back.pushforward_steps, 2);
   ASSERT_EQ(back.datasets.size(), 2u);
   EXPECT_EQ(back.datasets[1].scenario, "collide");
   EXPECT_EQ(back.datasets[1].count, 20);
