@@ -231,9 +231,10 @@ void add_train_command(CLI::App& app) {
                   "Huber loss transition in target-std units (default 1; 1000 makes it a squared "
                   "error for any realistic error, as the paper's loss in scene units is)");
   cmd->add_option("--pushforward", a->pushforward,
-                  "Frames the model pushes each example forward before its loss (default 0): it "
-                  "predicts them without gradient as a rollout does, from the drawn noisy state, "
-                  "and learns the next step from the state it reached itself");
+                  "Most frames the model pushes an example forward before its loss (default 0): "
+                  "n from 0 to N is drawn per example, the model predicts n steps without "
+                  "gradient from the drawn noisy state as a rollout does, and learns the next "
+                  "step from the state it reached itself");
   cmd->add_option("--threads", a->threads, "LibTorch threads (0: default)");
   cmd->add_flag("--resume", a->resume, "Continue from --out and its .state file exactly");
   cmd->add_option("--log", a->log, "CSV log, one row per step");

@@ -60,10 +60,11 @@ struct TrainOptions {
   /// less the object's mean, so no object as a whole moves (add_velocity_noise).
   std::string noise_mode = "point";
   double huber_delta = 1.0;  ///< Huber transition point in target-std units.
-  /// Frames each example is pushed forward by the model before its loss is taken: the state at
-  /// t − n is drawn (with its noise), the model predicts n steps without gradient as a rollout
-  /// does (held static points, rigid projection), and the loss compares its next prediction with
-  /// the true p(t + 1). 0: the loss is taken at the drawn state itself.
+  /// Most frames an example is pushed forward by the model before its loss is taken: for a drawn
+  /// loss frame t and n drawn from 0 to this number, the state at t − n is made (with its noise),
+  /// the model predicts n steps from it without gradient as a rollout does (held static points,
+  /// rigid projection), and the loss compares its next prediction with the true p(t + 1).
+  /// 0: the loss is always taken at the drawn state itself.
   int pushforward_steps = 0;
   int64_t max_steps = 0;       ///< Stop after this many steps in total (0: all epochs).
   int checkpoint_every = 200;  ///< Write checkpoint and training state every N steps.

@@ -4,6 +4,7 @@
 #include <c10/util/Exception.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -84,6 +85,7 @@ struct Example {
   Points next;
   const SceneData* scene = nullptr;
   int frame = 0;  // t
+  int push = 0;   // frames the model still pushes it forward before the loss
 };
 
 Example make_example(const SceneData& d, int t, const TrainOptions& o, Rng* rng) {
@@ -160,9 +162,10 @@ torch::Tensor batch_loss(DynamicsModel& model, const PreparedBatch& b, double de
                         delta, b.moving);
 }
 
-// Replaces every example of `b` by the state the model itself reaches from it one step later,
-// as a rollout does (the prediction without gradient, held static points, rigid projection),
-// with the true positions of that later frame as its target; then prepares the batch again.
+// Replaces every example of `b` that is still to be pushed (Example::push) by the state the model
+// itself reaches from it one step later, as a rollout does (the prediction without gradient, held
+// static points, rigid projection), with the true positions of that later frame as its target;
+// then prepares the batch again.
 void push_forward(DynamicsModel& model, PreparedBatch& b) {
   torch::Tensor delta;
   {
@@ -174,9 +177,11 @@ void push_forward(DynamicsModel& model, PreparedBatch& b) {
   Eigen::Index offset = 0;
   for (Example& e : b.examples) {
     const Eigen::Index n = e.state.size();
-    const Points raw =
-        e.state.position + Eigen::Map<const Points>(delta.data_ptr<double>() + 3 * offset, n, 3);
+    const double* d = delta.data_ptr<double>() + 3 * offset;
     offset += n;
+    if (e.push == 0) continue;
+    --e.push;
+    const Points raw = e.state.position + Eigen::Map<const Points>(d, n, 3);
     Points reached = e.scene->projector->project(raw);
     e.state.prev_velocity = std::move(e.state.velocity);
     e.state.velocity = reached - e.state.position;
@@ -437,11 +442,14 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
       const SceneData& d = train[static_cast<size_t>((*order)[static_cast<size_t>(b)])];
       global_points += d.loss_points(model->config());
       if (b >= mine + o.batch) continue;  // later ranks' examples: nothing more to draw for them
-      // With pushing forward, the drawn frame is where the loss is taken and the example starts
-      // that many frames earlier.
+      // With pushing forward, the drawn frame is where the loss is taken; the example starts a
+      // number of frames earlier drawn from 0 to pushforward_steps, and the model pushes it on.
       const int t = static_cast<int>(
           rng.uniform_int(2 + o.pushforward_steps, static_cast<int64_t>(d.frames.size()) - 2));
-      Example e = make_example(d, t - o.pushforward_steps, o, &rng);
+      const int push =
+          o.pushforward_steps > 0 ? static_cast<int>(rng.uniform_int(0, o.pushforward_steps)) : 0;
+      Example e = make_example(d, t - push, o, &rng);
+      e.push = push;
       if (b >= mine) examples.push_back(std::move(e));
     }
     PreparedBatch batch;
@@ -489,7 +497,11 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
     model->train();
     optimizer.zero_grad();
     const auto step_start = std::chrono::steady_clock::now();
-    for (int i = 0; i < o.pushforward_steps && !batch.empty; ++i) push_forward(model, batch);
+    auto pushing = [&batch] {
+      return std::any_of(batch.examples.begin(), batch.examples.end(),
+                         [](const Example& e) { return e.push > 0; });
+    };
+    while (pushing()) push_forward(model, batch);
     // Normalised by the points of the whole step (all ranks), so summed gradients are the mean.
     torch::Tensor loss =
         batch.empty ? torch::zeros({}, torch::kFloat)
