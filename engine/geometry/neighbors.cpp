@@ -55,12 +55,15 @@ NeighborList empty_list(Eigen::Index rows, int k) {
 
 void write_row(NeighborList& out, Eigen::Index row, const Neighbor* found, size_t count,
                const std::vector<int32_t>* global) {
-  for (size_t j = 0; j < count; ++j) {
-    const auto col = static_cast<Eigen::Index>(j);
-    out.index(row, col) =
-        global != nullptr ? (*global)[static_cast<size_t>(found[j].index)] : found[j].index;
-    out.mask(row, col) = 1;
+  // Through plain pointers into the row-major rows: the stores then cannot alias the matrices'
+  // own data pointers and sizes, which the element accessors would reload after every store.
+  int32_t* index = out.index.data() + row * out.index.cols();
+  if (global != nullptr) {
+    for (size_t j = 0; j < count; ++j) index[j] = (*global)[static_cast<size_t>(found[j].index)];
+  } else {
+    for (size_t j = 0; j < count; ++j) index[j] = found[j].index;
   }
+  std::fill_n(out.mask.data() + row * out.mask.cols(), count, uint8_t{1});
 }
 
 void write_row(NeighborList& out, Eigen::Index row, const std::vector<Neighbor>& found,

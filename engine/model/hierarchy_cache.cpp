@@ -205,15 +205,14 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
       const int width = anchor ? entry.width : k;
       found.resize(count * static_cast<size_t>(width));
       const size_t stride = plan.object->tree.knn_rows(queries.data(), count, width, found.data());
+      const size_t kept = std::min(stride, static_cast<size_t>(k));
       for (size_t c = 0; c < count; ++c) {
         const size_t i = searched[c];
         const Eigen::Index row = plan.rows[i];
         const Neighbor* nearest = found.data() + c * stride;
-        for (size_t j = 0; j < stride && j < static_cast<size_t>(k); ++j) {
-          out.index(row, static_cast<Eigen::Index>(j)) =
-              global[static_cast<size_t>(nearest[j].index)];
-          out.mask(row, static_cast<Eigen::Index>(j)) = 1;
-        }
+        int32_t* index = out.index.data() + row * k;  // row-major rows of k
+        for (size_t j = 0; j < kept; ++j) index[j] = global[static_cast<size_t>(nearest[j].index)];
+        std::fill_n(out.mask.data() + row * k, kept, uint8_t{1});
         if (!anchor) continue;
         int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
         double last = 0.0;
