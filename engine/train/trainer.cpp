@@ -171,7 +171,7 @@ void push_forward(DynamicsModel& model, PreparedBatch& b) {
   {
     torch::NoGradGuard no_grad;
     delta = model->predict_delta(b.input);
-    if (b.moving.defined()) delta = delta * b.moving.to(delta.dtype());
+    if (b.moving.defined()) delta = delta * b.moving;  // held static points stay put
     delta = delta.to(torch::kCPU, torch::kDouble).contiguous();
   }
   Eigen::Index offset = 0;
