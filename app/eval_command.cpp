@@ -2,6 +2,8 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <exception>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -17,6 +19,7 @@
 #include "engine/model/torch_runtime.h"
 #include "engine/rollout/evaluation.h"
 #include "engine/rollout/model_predictor.h"
+#include "engine/sim/scenario.h"
 #include "engine/train/process_group.h"
 #include "engine/train/train_options.h"
 
@@ -32,6 +35,7 @@ struct EvalArgs {
   int max_scenes = 0;
   double threshold = 0.0;
   double threshold_fraction = kContactThresholdFraction;
+  std::vector<std::string> scenario_threshold_fraction;  // SCENARIO=FRACTION
   double voxel = 0.0;
   bool voxel_given = false;
   bool threshold_given = false;
@@ -93,12 +97,39 @@ void run_eval_rank(const EvalArgs& args, const DistributedOptions& dist, const D
   if (!args.json.empty()) write_text_file_atomically(args.json, eval_to_json(summary));
 }
 
+// The --scenario-threshold-fraction values (SCENARIO=FRACTION) as a map; throws ValueError for a
+// malformed value, an unknown scenario, a fraction out of range or a scenario named twice.
+std::map<std::string, double> scenario_fractions(const std::vector<std::string>& values) {
+  const char* option = "--scenario-threshold-fraction";
+  std::map<std::string, double> out;
+  for (const std::string& v : values) {
+    const size_t eq = v.find('=');
+    const std::string name = v.substr(0, eq);
+    double fraction = 0.0;
+    size_t used = 0;
+    try {
+      if (eq != std::string::npos) fraction = std::stod(v.substr(eq + 1), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (eq == std::string::npos || name.empty() || used == 0 || used != v.size() - eq - 1) {
+      throw ValueError(option, "expected SCENARIO=FRACTION (e.g. drop=1), got '" + v + "'");
+    }
+    if (!is_scenario(name)) scenario_summary(name);  // throws, listing the scenarios
+    require_in_range(option, fraction, 0, 1e6, true);
+    if (!out.emplace(name, fraction).second) throw ValueError(option, name + " is named twice");
+  }
+  return out;
+}
+
 void run_eval(const EvalArgs& args) {
   require_int_in_range("--observed", args.observed, 3, kMaxFrameOption);
   if (args.voxel_given) require_in_range("--voxel", args.voxel, 0, kMaxVoxelOption, true);
   if (args.threshold_given)
     require_in_range("--threshold", args.threshold, 0, kMaxVoxelOption, true);
   require_in_range("--threshold-fraction", args.threshold_fraction, 0, 1e6, true);
+  const std::map<std::string, double> fractions =
+      scenario_fractions(args.scenario_threshold_fraction);
   require_int_in_range("--threads", args.threads, 0, max_threads_option(), "(0: default)");
   require_readable_file(args.checkpoint);
   if (args.max_scenes != 0) require_int_in_range("--max-scenes", args.max_scenes, 1, 1 << 30);
@@ -127,6 +158,7 @@ void run_eval(const EvalArgs& args) {
   if (args.voxel > 0) options.sampling.voxel = args.voxel;
   options.contact_threshold = args.threshold;
   options.threshold_fraction = args.threshold_fraction;
+  options.scenario_threshold_fraction = fractions;
   options.baseline = !args.no_baseline;
   if (dist) {
     run_eval_rank(args, *dist, split, model, options);
@@ -175,6 +207,11 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--threshold-fraction", args->threshold_fraction,
                   "Contact threshold as a fraction of the sampling voxel")
       ->capture_default_str();
+  cmd->add_option("--scenario-threshold-fraction", args->scenario_threshold_fraction,
+                  "SCENARIO=FRACTION: that scenario's contact threshold as a fraction of the\n"
+                  "voxel, in place of --threshold and --threshold-fraction (repeatable). The\n"
+                  "Physion protocol of the paper: --observed 14 --threshold-fraction 1.5\n"
+                  "--scenario-threshold-fraction drop=1 --scenario-threshold-fraction contain=1");
   cmd->add_option("--voxel", args->voxel, "Point sampling voxel (default: the checkpoint's)")
       ->each([args](const std::string&) { args->voxel_given = true; });
   cmd->add_flag("--no-baseline", args->no_baseline, "Skip the constant-velocity baseline");

@@ -37,6 +37,12 @@ void run_generate(const DatasetOptions& options) {
         static_cast<long long>(summary.positives), static_cast<long long>(options.count),
         100.0 * static_cast<double>(summary.positives) / static_cast<double>(options.count));
   }
+  if (options.hide_outcome_frames > 0 || options.balance) {
+    int64_t draws = 0;
+    for (const DatasetEntry& e : summary.entries) draws += e.draws;
+    std::printf("%lld trials drawn for %lld scenes\n", static_cast<long long>(draws),
+                static_cast<long long>(options.count));
+  }
 }
 
 }  // namespace
@@ -63,6 +69,15 @@ void add_generate_command(CLI::App& app) {
                   "simulation over the same time, stored more or less densely (it must divide the\n"
                   "240 Hz physics and the scenario's physics steps; e.g. 60 for the Physion-like\n"
                   "scenes, stored at 30)");
+  cmd->add_option("--hide-outcome", args->hide_outcome_frames,
+                  "Physion-like scenarios: draw a trial again while its target touches the zone\n"
+                  "in its first N frames, so that a model observing N frames cannot read the\n"
+                  "outcome off them (e.g. 14 for the paper's 0.45 s window at 30 fps); the\n"
+                  "manifest records each scene's draws and seed")
+      ->capture_default_str();
+  cmd->add_flag("--balance", args->balance,
+                "Physion-like scenarios: draw a trial again until scene i's outcome is\n"
+                "(i + i / 10) % 2, so that every 20 scenes (and each split) are half positive");
   cmd->add_option("--meshes", args->meshes_dir,
                   "Directory of mesh files (OBJ, PLY, STL, glTF, ...) drawn as objects by movi-c");
   cmd->callback([args] { run_generate(*args); });

@@ -79,16 +79,22 @@ Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
                      options);
 }
 
+double contact_threshold_for(const EvalOptions& options, const std::string& scenario,
+                             double voxel) {
+  const auto own = options.scenario_threshold_fraction.find(scenario);
+  if (own != options.scenario_threshold_fraction.end()) return own->second * voxel;
+  return options.contact_threshold > 0 ? options.contact_threshold
+                                       : options.threshold_fraction * voxel;
+}
+
 SceneEvaluation evaluate_scene(const DatasetItem& item, const StepPredictor& model,
                                const EvalOptions& options, double* voxel, double* threshold) {
   try {
     const Scene scene = read_scene(item.path);
     const ModelPoints points = build_model_points(scene, options.sampling);
-    const double contact = options.contact_threshold > 0
-                               ? options.contact_threshold
-                               : options.threshold_fraction * points.voxel;
+    const double contact = contact_threshold_for(options, scene.scenario, points.voxel);
     if (voxel) *voxel = points.voxel;
-    if (threshold) *threshold = contact;
+    if (threshold) *threshold = contact_threshold_for(options, "", points.voxel);
     RolloutOptions ro;
     ro.observed_frames = options.observed_frames;
     const Rollout m = run_rollout(scene, points, model, ro);
@@ -131,6 +137,9 @@ EvalSummary summarize_evaluation(const DatasetSplit& split, const EvalOptions& o
   out.voxel = voxel;
   out.threshold = threshold;
   for (SceneEvaluation& e : scenes) {
+    if (options.scenario_threshold_fraction.count(e.scenario) > 0) {
+      out.scenario_thresholds[e.scenario] = contact_threshold_for(options, e.scenario, voxel);
+    }
     accumulate(out.scenarios[e.scenario], e);
     accumulate(out.scenarios["all"], e);
     out.scenes.push_back(std::move(e));
@@ -210,6 +219,7 @@ std::string eval_to_json(const EvalSummary& s) {
   j["observed_frames"] = s.observed_frames;
   j["sampling_voxel"] = s.voxel;
   j["contact_threshold"] = s.threshold;
+  if (!s.scenario_thresholds.empty()) j["scenario_contact_thresholds"] = s.scenario_thresholds;
   j["baseline"] = kBaselineDescription;
   if (s.contact.scenarios > 0) {
     j["contact_scenario_mean"] = {{"scenarios", s.contact.scenarios},
@@ -294,7 +304,12 @@ EvalSummary read_eval_json(const std::string& path) {
       scenes.push_back(std::move(e));
     }
     if (scenes.empty()) throw FormatError(path, "scenes", "the evaluation has no scene");
-    return summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
+    EvalSummary summary = summarize_evaluation(split, options, std::move(scenes), voxel, threshold);
+    field = "scenario_contact_thresholds";
+    if (j.contains(field)) {
+      summary.scenario_thresholds = j.at(field).get<std::map<std::string, double>>();
+    }
+    return summary;
   } catch (const nlohmann::json::exception& e) {
     throw FormatError(path, field, std::string("missing or malformed (") + e.what() + ")");
   }
@@ -304,9 +319,15 @@ std::string eval_table(const EvalSummary& s) {
   std::string out;
   char line[256];
   std::snprintf(line, sizeof line,
-                "split %s, %d observed frames, sampling voxel %.4g, contact threshold %.4g\n",
+                "split %s, %d observed frames, sampling voxel %.4g, contact threshold %.4g",
                 s.split.c_str(), s.observed_frames, s.voxel, s.threshold);
   out += line;
+  std::string own;  // the scenarios with a threshold of their own
+  for (const auto& [name, value] : s.scenario_thresholds) {
+    std::snprintf(line, sizeof line, "%s%s %.4g", own.empty() ? "" : ", ", name.c_str(), value);
+    own += line;
+  }
+  out += own.empty() ? "\n" : " (" + own + ")\n";
   std::snprintf(line, sizeof line, "%-10s %6s %12s %12s %8s %9s %9s %9s\n", "scenario", "scenes",
                 "end error", "baseline", "labels", "contact", "baseline", "truth");
   out += line;

@@ -19,6 +19,7 @@
 #include "engine/io/scene_file.h"
 #include "engine/io/temp_file.h"
 #include "engine/sim/scenario.h"
+#include "engine/sim/simulation.h"
 
 namespace dynscope {
 namespace {
@@ -43,6 +44,20 @@ std::vector<std::string> mesh_files_in(const std::string& dir) {
   return files;
 }
 
+// True when scenes are selected among several draws (hide_outcome_frames or balance).
+bool selects_draws(const DatasetOptions& options) {
+  return options.hide_outcome_frames > 0 || options.balance;
+}
+
+// True when `scene` meets the selection options as scene `index`.
+bool meets_selection(const Scene& scene, const DatasetOptions& options, int64_t index) {
+  const int first = first_labelled_contact(scene);
+  if (options.hide_outcome_frames > 0 && first >= 0 && first < options.hide_outcome_frames) {
+    return false;
+  }
+  return !options.balance || (first >= 0 ? 1 : 0) == balanced_outcome(index);
+}
+
 std::string manifest_text(const DatasetOptions& options, const std::vector<std::string>& mesh_files,
                           const SimSetup& first, const DatasetSummary& summary) {
   using nlohmann::json;
@@ -63,6 +78,16 @@ std::string manifest_text(const DatasetOptions& options, const std::vector<std::
     m["label"] = "target_contacting_zone";
     m["positives"] = summary.positives;
   }
+  const bool selected = selects_draws(options);
+  if (selected) {
+    m["selection"] = {
+        {"hide_outcome_frames", options.hide_outcome_frames},
+        {"balance", options.balance},
+        {"rule",
+         "scene i is the first of draws 0, 1, ... (seed derive_seed(seed, i), then "
+         "derive_seed(derive_seed(seed, i), draw)) whose target does not touch the zone in its "
+         "first hide_outcome_frames frames and, with balance, whose outcome is (i + i / 10) % 2"}};
+  }
   json files = json::array();
   json split = {{"train", json::array()}, {"val", json::array()}, {"test", json::array()}};
   for (const DatasetEntry& e : summary.entries) {
@@ -72,6 +97,7 @@ std::string manifest_text(const DatasetOptions& options, const std::vector<std::
               {"split", e.split},
               {"num_objects", e.num_objects}};
     if (labelled) f["outcome"] = e.outcome;
+    if (selected) f["draws"] = e.draws;
     files.push_back(f);
     split[e.split].push_back(e.file);
   }
@@ -99,6 +125,13 @@ std::string split_of(int64_t index, int64_t count) {
   return r < 8 ? "train" : (r == 8 ? "val" : "test");
 }
 
+int balanced_outcome(int64_t index) { return static_cast<int>((index + index / 10) % 2); }
+
+uint64_t draw_seed(uint64_t seed, int64_t index, int draw) {
+  const uint64_t first = derive_seed(seed, static_cast<uint64_t>(index));
+  return draw == 0 ? first : derive_seed(first, static_cast<uint64_t>(draw));
+}
+
 std::vector<Mesh> load_mesh_dir(const std::string& dir) {
   std::vector<Mesh> meshes;
   for (const std::string& f : mesh_files_in(dir)) meshes.push_back(import_mesh(f));
@@ -124,11 +157,31 @@ void check_dataset_options(const DatasetOptions& options) {
   if (!(options.frame_rate_hz >= 0) || !std::isfinite(options.frame_rate_hz)) {
     throw ValueError("frame_rate", "must be a positive rate in Hz (or 0: the scenario's own)");
   }
-  if (options.frame_rate_hz != 0) {
-    // Whether the rate fits the scenario's physics steps (movi-c has movi-a's rates and frames).
+  const bool labelled = scenario_has_contact_label(options.scenario);
+  if (options.balance && !labelled) {
+    throw ValueError(
+        "balance", "only a scenario with a contact label can be balanced, not " + options.scenario);
+  }
+  if (options.hide_outcome_frames < 0) {
+    throw ValueError("hide_outcome",
+                     "must be >= 0 frames, got " + std::to_string(options.hide_outcome_frames));
+  }
+  if (options.hide_outcome_frames > 0 && !labelled) {
+    throw ValueError("hide_outcome", "only a scenario with a contact label has an outcome, not " +
+                                         options.scenario);
+  }
+  if (options.frame_rate_hz != 0 || options.hide_outcome_frames > 0) {
+    // Whether the rate fits the scenario's physics steps (movi-c has movi-a's rates and frames),
+    // and the frames stored at that rate.
     SimSetup setup = scenario_setup(options.scenario == "movi-c" ? "movi-a" : options.scenario,
                                     derive_seed(options.seed, 0));
-    set_frame_rate(setup, options.frame_rate_hz);
+    if (options.frame_rate_hz != 0) set_frame_rate(setup, options.frame_rate_hz);
+    if (options.hide_outcome_frames >= setup.num_frames) {
+      throw ValueError("hide_outcome",
+                       std::to_string(options.hide_outcome_frames) +
+                           " frames leave no frame for the outcome: " + options.scenario +
+                           " scenes have " + std::to_string(setup.num_frames));
+    }
   }
   if (options.out_dir.empty()) throw ValueError("out", "output directory is empty");
   std::error_code ec;
@@ -177,10 +230,25 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
       try {
         DatasetEntry e;
         e.index = i;
-        e.seed = derive_seed(options.seed, static_cast<uint64_t>(i));
         e.file = scene_file_name(options.scenario, i);
         e.split = split_of(i, options.count);
-        const Scene scene = generate_scene(options.scenario, e.seed, scenario_options);
+        Scene scene;
+        for (int draw = 0;; ++draw) {
+          if (draw == kMaxDraws) {
+            throw ValueError(
+                "hide_outcome",
+                e.file + ": none of " + std::to_string(kMaxDraws) +
+                    " draws met the selection (hide the outcome for " +
+                    std::to_string(options.hide_outcome_frames) + " frames" +
+                    (options.balance ? ", outcome " + std::to_string(balanced_outcome(i))
+                                     : std::string()) +
+                    ")");
+          }
+          e.seed = draw_seed(options.seed, i, draw);
+          scene = generate_scene(options.scenario, e.seed, scenario_options);
+          e.draws = draw + 1;
+          if (meets_selection(scene, options, i)) break;
+        }
         e.num_objects = static_cast<int>(scene.objects.size());
         if (labelled) e.outcome = contact_outcome(scene) ? 1 : 0;
         {

@@ -19,6 +19,11 @@ struct DatasetOptions {
   int jobs = 1;              ///< Worker threads, >= 1; results do not depend on it.
   std::string meshes_dir;    ///< Mesh files for "movi-c"; must be empty for other scenarios.
   double frame_rate_hz = 0;  ///< Stored frames per second; 0: the scenario's own (set_frame_rate).
+  /// > 0: a trial whose target touches the zone in its first this many frames is drawn again
+  /// (labelled scenarios only), so that an observer of those frames cannot read its outcome.
+  int hide_outcome_frames = 0;
+  /// Scene i is drawn again until its outcome is balanced_outcome(i) (labelled scenarios only).
+  bool balance = false;
 };
 
 /// One written scene.
@@ -29,6 +34,7 @@ struct DatasetEntry {
   std::string split;  ///< "train", "val" or "test".
   int num_objects = 0;
   int outcome = -1;  ///< 1/0 = target touched the zone in some frame / never; -1 = no label.
+  int draws = 1;  ///< Trials drawn for this scene (> 1 only with hide_outcome_frames or balance).
 };
 
 /// What generate_dataset() wrote.
@@ -46,6 +52,18 @@ std::string scene_file_name(const std::string& scenario, int64_t index);
 /// the rest "train" (so every split has a scene); with 1 or 2 every scene is "train".
 std::string split_of(int64_t index, int64_t count);
 
+/// The outcome DatasetOptions::balance asks of scene `index`: (index + index / 10) % 2. Every
+/// twenty consecutive scenes hold ten of each, and so does each split over twenty scenes (the
+/// splits go by index % 10, and the pattern alternates within and between blocks of ten).
+int balanced_outcome(int64_t index);
+
+/// The seed of draw `draw` (0, 1, ...) of scene `index`: derive_seed(seed, index) for the first,
+/// derive_seed(derive_seed(seed, index), draw) for the others.
+uint64_t draw_seed(uint64_t seed, int64_t index, int draw);
+
+/// Most trials one scene may draw to meet hide_outcome_frames and balance.
+constexpr int kMaxDraws = 1000;
+
 /// Largest --count of one dataset (a larger one is a typing error, not a dataset).
 constexpr int64_t kMaxDatasetCount = 10000000;
 /// Largest --jobs of one dataset generation.
@@ -56,15 +74,19 @@ constexpr int kMaxDatasetJobs = 1024;
 std::vector<Mesh> load_mesh_dir(const std::string& dir);
 
 /// Checks every option before any work: known scenario, count >= 1, jobs >= 1, meshes only
-/// (and always) for "movi-c", a frame rate >= 0, and an output directory that can be created and
-/// written. Creates the output directory. Throws ValueError (bad option) or IoError (bad path)
-/// naming it.
+/// (and always) for "movi-c", a frame rate >= 0, hide_outcome_frames and balance only for a
+/// labelled scenario (hide_outcome_frames below its frame count), and an output directory that can
+/// be created and written. Creates the output directory. Throws ValueError (bad option) or IoError
+/// (bad path) naming it.
 void check_dataset_options(const DatasetOptions& options);
 
 /// Generates `options.count` scenes on `options.jobs` threads, writes each to
 /// out_dir/scene_file_name() and then out_dir/manifest.json (scenario, count, base seed,
 /// per-file seed, split, outcome, generator parameters, their frame rate and frame count as
-/// stored). The same options give identical files whatever `jobs` is. Reports each finished scene
+/// stored; with hide_outcome_frames or balance the rule and each file's draws). Scene i is the
+/// first of its draws (draw_seed) that meets hide_outcome_frames and balance; after kMaxDraws
+/// draws that do not, generation fails naming the scene. The same options give identical files
+/// whatever `jobs` is. Reports each finished scene
 /// to `progress` if not null. Throws like check_dataset_options, or the first error a worker met
 /// (the files written so far remain).
 DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progress = nullptr);

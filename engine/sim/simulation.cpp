@@ -113,13 +113,15 @@ Scene simulate(const SimSetup& setup) {
   return scene;
 }
 
-bool contact_outcome(const Scene& scene) {
+int first_labelled_contact(const Scene& scene) {
   const auto it = scene.labels.find(kContactLabel);
-  if (it == scene.labels.end()) return false;
-  for (double v : it->second) {
-    if (v > 0.5) return true;
+  if (it == scene.labels.end()) return -1;
+  for (size_t f = 0; f < it->second.size(); ++f) {
+    if (it->second[f] > 0.5) return static_cast<int>(f);
   }
-  return false;
+  return -1;
 }
+
+bool contact_outcome(const Scene& scene) { return first_labelled_contact(scene) >= 0; }
 
 }  // namespace dynscope

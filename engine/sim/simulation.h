@@ -68,7 +68,11 @@ void set_frame_rate(SimSetup& setup, double frame_rate_hz);
 /// Deterministic. Throws ValueError naming the body or field that is inconsistent.
 Scene simulate(const SimSetup& setup);
 
-/// True if `scene` has kContactLabel and it is 1 in some frame (the Physion scene outcome).
+/// The first frame in which `scene`'s kContactLabel is 1; -1 when it never is or is missing.
+int first_labelled_contact(const Scene& scene);
+
+/// True if `scene` has kContactLabel and it is 1 in some frame (the Physion scene outcome):
+/// first_labelled_contact(scene) >= 0.
 bool contact_outcome(const Scene& scene);
 
 }  // namespace dynscope

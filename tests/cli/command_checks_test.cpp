@@ -141,6 +141,33 @@ TEST_F(CommandChecks, EvalOfSeveralScenarioDirectoriesGivesTheMeanOverScenarios)
   ASSERT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find("per scenario"), std::string::npos) << c.output;
   EXPECT_NE(c.output.find("collide"), std::string::npos) << c.output;
+
+  // A threshold of roll's own (the Physion protocol's form): every scene's three contact
+  // decisions follow its closest approach and its scenario's threshold.
+  const std::string both = " --data " + path("collide") + " " + path("roll");
+  const std::string own = " --scenario-threshold-fraction ";
+  expect_refused(eval + both + own + "roll",
+                 {"--scenario-threshold-fraction", "SCENARIO=FRACTION"});
+  expect_refused(eval + both + own + "roll=x", {"SCENARIO=FRACTION", "'roll=x'"});
+  expect_refused(eval + both + own + "nope=1", {"unknown scenario 'nope'"});
+  expect_refused(eval + both + own + "roll=0", {"--scenario-threshold-fraction"});
+  expect_refused(eval + both + own + "roll=1" + own + "roll=2", {"roll is named twice"});
+  const auto t = run_dynscope(eval + both + " --threshold-fraction 1.5" + own + "roll=1 --json " +
+                              path("own.json"));
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  EXPECT_NE(t.output.find("contact threshold 0.075 (roll 0.05)"), std::string::npos) << t.output;
+  const nlohmann::json o = nlohmann::json::parse(read_bytes(path("own.json")));
+  EXPECT_DOUBLE_EQ(o.at("contact_threshold").get<double>(), 0.075);
+  EXPECT_DOUBLE_EQ(o.at("scenario_contact_thresholds").at("roll").get<double>(), 0.05);
+  EXPECT_EQ(o.at("scenario_contact_thresholds").size(), 1u);
+  for (const nlohmann::json& e : o.at("scenes")) {
+    const double threshold = e.at("scenario") == "roll" ? 0.05 : 0.075;
+    for (const char* who : {"", "truth_", "baseline_"}) {
+      EXPECT_EQ(e.at(std::string(who) + "contact").get<bool>(),
+                e.at(std::string(who) + "min_distance").get<double>() < threshold)
+          << e.at("file") << " " << who;
+    }
+  }
 }
 
 // An output into a directory that does not exist is refused before any work (one line, no

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "engine/core/error.h"
@@ -86,6 +87,31 @@ TEST(EvalComparison, ReadsAnEvaluationBackExactly) {
   EXPECT_EQ(all.labelled, 2);
   EXPECT_DOUBLE_EQ(all.model_accuracy, 0.5);  // a: contact and label 1; b: contact, label 0
   EXPECT_DOUBLE_EQ(all.model_end_error, (1.0 / 3.0 + 2.5 + 0.7) / 3.0);
+}
+
+// A scenario's own threshold (EvalOptions::scenario_threshold_fraction) is summarised in scene
+// units, named in the table and read back.
+TEST(EvalComparison, AScenariosOwnThresholdIsKeptAndReadBack) {
+  DatasetSplit split;
+  split.dir = "data/x";
+  split.split = "all";
+  EvalOptions options;
+  options.threshold_fraction = 1.5;
+  options.scenario_threshold_fraction = {{"collide", 1.0}, {"drop", 2.0}};  // no drop scene
+  EXPECT_DOUBLE_EQ(contact_threshold_for(options, "collide", 0.3), 0.3);
+  EXPECT_DOUBLE_EQ(contact_threshold_for(options, "roll", 0.3), 0.45);
+  options.contact_threshold = 0.2;  // an absolute threshold does not replace a scenario's own
+  EXPECT_DOUBLE_EQ(contact_threshold_for(options, "collide", 0.3), 0.3);
+  EXPECT_DOUBLE_EQ(contact_threshold_for(options, "roll", 0.3), 0.2);
+  const EvalSummary s = summarize_evaluation(
+      split, options, {scene("a.h5", 1.0, 1, true), scene("b.h5", 2.0)}, 0.3, 0.2);
+  const std::map<std::string, double> expected = {{"collide", 0.3}};
+  EXPECT_EQ(s.scenario_thresholds, expected) << "only scenarios that have scenes";
+  EXPECT_NE(eval_table(s).find("contact threshold 0.2 (collide 0.3)"), std::string::npos)
+      << eval_table(s);
+  const std::string path = (temp_dir() / "own_threshold.json").string();
+  write_text_file_atomically(path, eval_to_json(s));
+  EXPECT_EQ(read_eval_json(path).scenario_thresholds, expected);
 }
 
 TEST(EvalComparison, SeedMeansAndPairedDifferencesMatchAHandComputation) {

@@ -14,6 +14,7 @@
 #include "engine/core/rng.h"
 #include "engine/io/scene_file.h"
 #include "engine/sim/scenario.h"
+#include "engine/sim/simulation.h"
 
 namespace dynscope {
 namespace {
@@ -186,6 +187,65 @@ TEST(Dataset, JobsDoNotChangeTheResults) {
   }
 }
 
+TEST(Dataset, BalancedOutcomesAlternateWithinAndAcrossSplits) {
+  for (int64_t start : {0, 20, 1000}) {
+    std::map<std::string, std::pair<int, int>> split;  // positives, scenes
+    for (int64_t i = start; i < start + 20; ++i) {
+      auto& [positives, scenes] = split[split_of(i, 10000)];
+      positives += balanced_outcome(i);
+      ++scenes;
+    }
+    EXPECT_EQ(split["train"], std::make_pair(8, 16)) << start;
+    EXPECT_EQ(split["val"], std::make_pair(1, 2)) << start;
+    EXPECT_EQ(split["test"], std::make_pair(1, 2)) << start;
+  }
+  EXPECT_EQ(draw_seed(7, 3, 0), derive_seed(7, 3));
+  EXPECT_EQ(draw_seed(7, 3, 2), derive_seed(derive_seed(7, 3), 2));
+}
+
+// --hide-outcome and --balance: every scene is the first of its draws that meets both, the draws
+// before it each fail one, and the result does not depend on --jobs.
+TEST(Dataset, SelectedScenesHideTheirOutcomeAndAreBalanced) {
+  TempDir dir("selection");
+  DatasetOptions options;
+  options.scenario = "collide";  // most positives touch the zone early: many redraws
+  options.count = 12;
+  options.seed = 5;
+  options.hide_outcome_frames = 14;
+  options.balance = true;
+  options.out_dir = dir.str("one");
+  const DatasetSummary summary = generate_dataset(options);
+  options.jobs = 3;
+  options.out_dir = dir.str("two");
+  generate_dataset(options);
+  EXPECT_EQ(read_text(dir.str("one/manifest.json")), read_text(dir.str("two/manifest.json")));
+  EXPECT_EQ(summary.positives, 6);
+  const nlohmann::json m = nlohmann::json::parse(read_text(summary.manifest_path));
+  EXPECT_EQ(m["selection"]["hide_outcome_frames"], 14);
+  EXPECT_EQ(m["selection"]["balance"], true);
+  int redrawn = 0;
+  for (int i = 0; i < 12; ++i) {
+    const nlohmann::json& f = m["files"][i];
+    const int draws = f["draws"].get<int>();
+    ASSERT_GE(draws, 1);
+    EXPECT_EQ(f["seed"].get<uint64_t>(), draw_seed(5, i, draws - 1));
+    const Scene stored = read_scene(dir.str("one/" + f["file"].get<std::string>()));
+    expect_same_scene(stored, generate_scene("collide", f["seed"].get<uint64_t>()), f["file"]);
+    const int first = first_labelled_contact(stored);
+    EXPECT_TRUE(first < 0 || first >= 14) << f["file"] << " touches at frame " << first;
+    EXPECT_EQ(first >= 0 ? 1 : 0, balanced_outcome(i)) << f["file"];
+    EXPECT_EQ(f["outcome"].get<int>(), balanced_outcome(i));
+    for (int d = 0; d + 1 < draws; ++d) {
+      const Scene rejected = generate_scene("collide", draw_seed(5, i, d));
+      const int at = first_labelled_contact(rejected);
+      EXPECT_TRUE((at >= 0 && at < 14) || (at >= 0 ? 1 : 0) != balanced_outcome(i))
+          << f["file"] << " draw " << d << " met the selection but was not kept";
+    }
+    redrawn += draws > 1 ? 1 : 0;
+  }
+  EXPECT_GT(redrawn, 3) << "the selection should have redrawn several collide scenes";
+}
+
 TEST(Dataset, BadOptionsFailBeforeAnyWork) {
   TempDir dir("bad");
   DatasetOptions options;
@@ -220,6 +280,24 @@ TEST(Dataset, BadOptionsFailBeforeAnyWork) {
   EXPECT_NE(message(o).find("frame_rate: 70 Hz does not divide"), std::string::npos) << message(o);
   o.frame_rate_hz = -1;
   EXPECT_NE(message(o).find("frame_rate: must be a positive rate"), std::string::npos)
+      << message(o);
+  o = options;
+  o.hide_outcome_frames = -1;
+  EXPECT_NE(message(o).find("hide_outcome: must be >= 0"), std::string::npos) << message(o);
+  o.hide_outcome_frames = 60;  // drop stores 60 frames
+  EXPECT_NE(message(o).find("hide_outcome: 60 frames leave no frame for the outcome: drop scenes "
+                            "have 60"),
+            std::string::npos)
+      << message(o);
+  o = options;
+  o.scenario = "movi-a";
+  o.hide_outcome_frames = 5;
+  EXPECT_NE(message(o).find("hide_outcome: only a scenario with a contact label"),
+            std::string::npos)
+      << message(o);
+  o.hide_outcome_frames = 0;
+  o.balance = true;
+  EXPECT_NE(message(o).find("balance: only a scenario with a contact label"), std::string::npos)
       << message(o);
   EXPECT_FALSE(fs::exists(options.out_dir)) << "nothing created for bad options";
 
