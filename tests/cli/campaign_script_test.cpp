@@ -24,8 +24,8 @@ using test::run_shell;
 const std::string kScript = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/run.sh";
 const std::string kPhysionEvaluate =
     std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/physion-600/evaluate.sh";
-const char* const kScenarios[] = {"drop", "collide", "roll", "dominoes", "support", "contain",
-                                  "link"};
+const char* const kScenarios[] = {"drop",    "collide", "roll", "dominoes",
+                                  "support", "contain", "link"};
 
 void write_file(const fs::path& path, const std::string& text) {
   std::ofstream out(path);
@@ -116,10 +116,11 @@ void write_progress(const fs::path& checkpoint, int steps, int total) {
 class PhysionEvaluateScript : public CampaignScript {
  protected:
   test::CommandResult evaluate(const std::string& split) const {
-    return run_shell("DYNSCOPE=" + recorder_.string() + " DYNSCOPE_CAMPAIGN_RUNS=" +
-                     (dir_ / "runs").string() + " DYNSCOPE_CAMPAIGN_DATA=" +
-                     (dir_ / "data").string() + " DYNSCOPE_CAMPAIGN_OUT=" +
-                     (dir_ / "out").string() + " bash " + kPhysionEvaluate + " " + split);
+    return run_shell("DYNSCOPE=" + recorder_.string() +
+                     " DYNSCOPE_CAMPAIGN_RUNS=" + (dir_ / "runs").string() +
+                     " DYNSCOPE_CAMPAIGN_DATA=" + (dir_ / "data").string() +
+                     " DYNSCOPE_CAMPAIGN_OUT=" + (dir_ / "out").string() + " bash " +
+                     kPhysionEvaluate + " " + split);
   }
 };
 
@@ -140,8 +141,8 @@ TEST_F(PhysionEvaluateScript, GeneratesTheHeldOutSetAndEvaluatesOnlyFinishedRuns
   std::string scenes;
   for (const char* s : kScenarios) scenes += " --data " + data + "/" + s;
   for (const char* name : {"centred_s1", "centred_s2"}) {
-    expected += "eval --checkpoint " + (dir_ / "runs").string() + "/" + name + ".best.pt" +
-                scenes + " --split all --threads 1 --json " + out + "/" + name + ".test.json\n";
+    expected += "eval --checkpoint " + (dir_ / "runs").string() + "/" + name + ".best.pt" + scenes +
+                " --split all --threads 1 --json " + out + "/" + name + ".test.json\n";
   }
   expected += "compare centred=" + out + "/centred_s1.test.json," + out +
               "/centred_s2.test.json --json " + out + "/compare.test.json\n";
@@ -149,6 +150,31 @@ TEST_F(PhysionEvaluateScript, GeneratesTheHeldOutSetAndEvaluatesOnlyFinishedRuns
   EXPECT_NE(result.output.find("paper_s3: still training (5 of 10 steps), skipped"),
             std::string::npos)
       << result.output;
+}
+
+// `hidden`: the paper's protocol on the scenes its window does not give away, generated apart.
+TEST_F(PhysionEvaluateScript, HiddenGeneratesSelectedScenesAndEvaluatesWithThePapersProtocol) {
+  fs::create_directories(dir_ / "runs");
+  write_progress(dir_ / "runs" / "paper_s2.pt", 10, 10);
+  const auto result = evaluate("hidden");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string data = (dir_ / "data" / "physion-hidden").string();
+  const std::string out = (dir_ / "out").string();
+  std::string expected;
+  for (const char* s : kScenarios) {
+    expected += "generate --scenario " + std::string(s) +
+                " --count 48 --seed 4 --hide-outcome 14 --balance --out " + data + "/" + s +
+                " --jobs 2\n";
+  }
+  std::string scenes;
+  for (const char* s : kScenarios) scenes += " --data " + data + "/" + s;
+  expected += "eval --checkpoint " + (dir_ / "runs").string() + "/paper_s2.best.pt" + scenes +
+              " --split all --observed 14 --threshold-fraction 1.5 --scenario-threshold-fraction "
+              "drop=1 --scenario-threshold-fraction contain=1 --threads 1 --json " +
+              out + "/paper_s2.hidden.json\n";
+  expected +=
+      "compare paper=" + out + "/paper_s2.hidden.json --json " + out + "/compare.hidden.json\n";
+  EXPECT_EQ(calls(), expected);
 }
 
 TEST_F(PhysionEvaluateScript, ValidationNeedsTheCampaignsDataUnknownSplitsAreRefusedHelpExplains) {
@@ -181,9 +207,9 @@ TEST_F(PhysionEvaluateScript, EvaluatesTheValidationSplitOfTheCampaignsData) {
                    (dir_ / "data" / "physion-600" / "drop").string()),
             std::string::npos)
       << c;
-  EXPECT_NE(c.find(" --split val --threads 1 --json " + (dir_ / "out").string() +
-                   "/paper_s1.val.json\n"),
-            std::string::npos)
+  EXPECT_NE(
+      c.find(" --split val --threads 1 --json " + (dir_ / "out").string() + "/paper_s1.val.json\n"),
+      std::string::npos)
       << c;
   EXPECT_NE(c.find("compare paper=" + (dir_ / "out").string() + "/paper_s1.val.json"),
             std::string::npos)

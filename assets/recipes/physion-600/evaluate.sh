@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # Evaluates the finished runs of the Physion-like reproduction campaign and compares them over
 # seeds:
-#   assets/recipes/physion-600/evaluate.sh [test|val]      (default: test)
+#   assets/recipes/physion-600/evaluate.sh [test|val|hidden]      (default: test)
 # test: the held-out set, 24 scenes per scenario generated apart with a seed the campaign's data
 # never uses (`dynscope generate --scenario S --count 24 --seed 3`, into data/physion-test/S;
 # generated here when missing) and evaluated whole (`--split all`). val: the validation split of
 # the campaign's own data (data/physion-600, written by the recipes' first run), the split the
-# epochs were chosen on.
+# epochs were chosen on. hidden: the paper's Physion protocol on scenes whose outcome its window
+# does not show: 48 scenes per scenario, half positive, none touching the zone in the first 14
+# frames (`generate --count 48 --seed 4 --hide-outcome 14 --balance`, into
+# data/physion-hidden/S), evaluated whole with 14 observed frames (0.45 s) and the protocol's
+# contact thresholds (1.5 x the voxel, 1.0 x in drop and contain).
 # Each finished run's best-epoch checkpoint (chosen on the validation split during training) is
 # evaluated once into out/campaign-physion/NAME.SPLIT.json (again only when the checkpoint is
 # newer); runs still training are skipped. Then `dynscope compare` prints every variant's contact
@@ -23,6 +27,7 @@ source assets/recipes/progress.sh
 split=${1:-test}
 data_root=${DYNSCOPE_CAMPAIGN_DATA:-data}
 scenarios=(drop collide roll dominoes support contain link)
+protocol=()  # the evaluation protocol's options beyond the data and split
 case "$split" in
   test)
     root=$data_root/physion-test
@@ -33,6 +38,19 @@ case "$split" in
         "$dynscope" generate --scenario "$s" --count 24 --seed 3 --out "$root/$s" --jobs 2
       fi
     done
+    ;;
+  hidden)
+    root=$data_root/physion-hidden
+    eval_split=all
+    for s in "${scenarios[@]}"; do
+      if [ ! -f "$root/$s/manifest.json" ]; then
+        echo "generating the hidden-outcome $s scenes into $root/$s"
+        "$dynscope" generate --scenario "$s" --count 48 --seed 4 --hide-outcome 14 --balance \
+          --out "$root/$s" --jobs 2
+      fi
+    done
+    protocol=(--observed 14 --threshold-fraction 1.5 --scenario-threshold-fraction drop=1
+      --scenario-threshold-fraction contain=1)
     ;;
   val)
     root=$data_root/physion-600
@@ -50,7 +68,7 @@ case "$split" in
     exit 0
     ;;
   *)
-    echo "usage: $0 [test|val]  (--help explains)" >&2
+    echo "usage: $0 [test|val|hidden]  (--help explains)" >&2
     exit 2
     ;;
 esac
@@ -60,4 +78,4 @@ for s in "${scenarios[@]}"; do data+=(--data "$root/$s"); done
 # level-0 radius of 0.15 and the 60-epoch schedule.
 evaluate_and_compare assets/recipes/physion-600 "${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}" \
   "${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}" "$split" "centred paper held radius15 long60" \
-  "${data[@]}" --split "$eval_split"
+  "${data[@]}" --split "$eval_split" "${protocol[@]}"
