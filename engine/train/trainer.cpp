@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -17,11 +16,11 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
-#include <thread>
 #include <utility>
 
 #include "engine/core/error.h"
 #include "engine/core/log.h"
+#include "engine/core/prefetch_thread.h"
 #include "engine/core/progress.h"
 #include "engine/core/rng.h"
 #include "engine/io/scene_file.h"
@@ -195,71 +194,6 @@ void push_forward(DynamicsModel& model, PreparedBatch& b) {
   b.global_points = global_points;
   b.examples = std::move(examples);
 }
-
-// Prepares the next batch on a thread of its own while the current step runs on this one.
-class BatchPrefetcher {
- public:
-  BatchPrefetcher() : thread_([this] { loop(); }) {}
-  ~BatchPrefetcher() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    wake_.notify_all();
-    thread_.join();
-  }
-  BatchPrefetcher(const BatchPrefetcher&) = delete;
-  BatchPrefetcher& operator=(const BatchPrefetcher&) = delete;
-
-  /// Starts `job`; the previous result must have been taken.
-  void start(std::function<PreparedBatch()> job) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      job_ = std::move(job);
-      ready_ = false;
-    }
-    wake_.notify_all();
-  }
-  /// Waits for the started job; rethrows what it threw.
-  PreparedBatch take() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    wake_.wait(lock, [this] { return ready_; });
-    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
-    return std::move(result_);
-  }
-
- private:
-  void loop() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    while (true) {
-      wake_.wait(lock, [this] { return stop_ || job_; });
-      if (stop_) return;
-      std::function<PreparedBatch()> job = std::move(job_);
-      job_ = nullptr;
-      lock.unlock();
-      PreparedBatch result;
-      std::exception_ptr error;
-      try {
-        result = job();
-      } catch (...) {
-        error = std::current_exception();
-      }
-      lock.lock();
-      result_ = std::move(result);
-      error_ = error;
-      ready_ = true;
-      wake_.notify_all();
-    }
-  }
-
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::function<PreparedBatch()> job_;
-  PreparedBatch result_;
-  std::exception_ptr error_;
-  bool ready_ = false, stop_ = false;
-  std::thread thread_;
-};
 
 NormStats compute_stats(const std::vector<SceneData>& scenes, TargetMode target) {
   NormStatsAccumulator acc(target);
@@ -484,7 +418,8 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   };
   const std::vector<torch::Tensor> parameters = model->parameters();
 
-  BatchPrefetcher prefetch;
+  // The next batch is prepared on a thread of its own while the current step runs on this one.
+  PrefetchThread<PreparedBatch> prefetch;
   if (step < total) {
     prefetch.start([&step_batch, s = step, ord = order_for(step)] { return step_batch(s, ord); });
   }
