@@ -31,6 +31,8 @@ class RigidProjector {
   void clamp_to_floor(Points& points, std::vector<Pose>& poses, double floor_z = 0.0) const;
 
   int num_objects() const { return static_cast<int>(rigid_.size()); }
+  /// The rigid flag of every object `[O]`, as given.
+  const std::vector<uint8_t>& rigid() const { return rigid_; }
 
  private:
   std::vector<uint8_t> rigid_;

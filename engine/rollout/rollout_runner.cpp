@@ -22,14 +22,10 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
                                      "], got " + std::to_string(options.observed_frames));
   }
   const ScenePointCloud& cloud = points.cloud;
-  std::vector<uint8_t> rigid;
-  Rollout r;
-  for (const Object& o : scene.objects) {
-    rigid.push_back(o.rigid ? 1 : 0);
-    r.pose_object_ids.push_back(o.id);
-  }
-  r.pose_rigid = rigid;
   const RigidProjector projector(cloud, scene);
+  Rollout r;
+  for (const Object& o : scene.objects) r.pose_object_ids.push_back(o.id);
+  r.pose_rigid = projector.rigid();
   const std::vector<uint8_t> static_points = cloud.static_mask(scene);
 
   r.scenario = scene.scenario;
@@ -76,7 +72,7 @@ Rollout run_rollout(const Scene& scene, const ModelPoints& points, const StepPre
                                            " points or non-finite positions");
       }
       predicted = options.project_rigid ? projector.project(raw, &poses) : raw;
-      if (!options.project_rigid) poses.assign(rigid.size(), Pose{});
+      if (!options.project_rigid) poses.assign(projector.rigid().size(), Pose{});
       if (options.floor_clamp) projector.clamp_to_floor(predicted, poses);
       if (progress) progress->advance();
     }
