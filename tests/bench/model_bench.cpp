@@ -88,19 +88,28 @@ void BM_NeighbourSearch(benchmark::State& state) {
 }
 BENCHMARK(BM_NeighbourSearch)->Apply(apply_args);
 
-// Arguments {points, cache}: a rollout's consecutive rigid steps (make_bench_rigid_steps), the
-// PointConv model, the hierarchy built without (0) and with (1) one HierarchyCache for the run.
+// Arguments {points, cache, density}: a rollout's consecutive rigid steps (make_bench_rigid_steps),
+// the PointConv model, the hierarchy built without (0) and with (1) one HierarchyCache for the run;
+// density 0 the benchmark's spheres, 1 the same scene scaled so that its points lie the
+// Physion-like scenes' sampling voxel (0.05) apart (bench_scale_for_spacing).
 void rigid_step_args(benchmark::internal::Benchmark* b) {
   for (int n : {1000, 3000, 10000}) {
-    for (int cached : {0, 1}) b->Args({n, cached});
+    for (int cached : {0, 1}) b->Args({n, cached, 0});
   }
-  b->ArgNames({"points", "cache"})->Unit(benchmark::kMillisecond)->UseRealTime();
+  for (int cached : {0, 1}) b->Args({3000, cached, 1});
+  b->ArgNames({"points", "cache", "density"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+// The rigid steps of rigid_step_args' arguments.
+std::vector<PointState> rigid_steps_for(const benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double scale = state.range(2) ? bench_scale_for_spacing(n, 0.05) : 1.0;
+  return make_bench_rigid_steps(n, kBenchRigidSteps, scale);
 }
 
 void BM_NeighbourSearchRigidSteps(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const std::vector<PointState> steps =
-      make_bench_rigid_steps(static_cast<int>(state.range(0)), kBenchRigidSteps);
+  const std::vector<PointState> steps = rigid_steps_for(state);
   DynamicsModel model(config_for(0));
   HierarchyCache cache;
   HierarchyCache* use = state.range(1) ? &cache : nullptr;
@@ -232,8 +241,7 @@ BENCHMARK(BM_RolloutStep)->Apply(apply_impl_args);
 // with the rollout's HierarchyCache.
 void BM_RolloutStepRigidSteps(benchmark::State& state) {
   set_torch_threads(bench_threads());
-  const std::vector<PointState> steps =
-      make_bench_rigid_steps(static_cast<int>(state.range(0)), kBenchRigidSteps);
+  const std::vector<PointState> steps = rigid_steps_for(state);
   DynamicsModel model(config_for(0));
   model->eval();
   HierarchyCache cache;
