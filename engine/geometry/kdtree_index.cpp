@@ -561,4 +561,112 @@ void KdIndex::knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
   }
 }
 
+void KdIndex::knn_other(size_t group, const KdIndex& other, int k, std::vector<Neighbor>& scratch,
+                        const SelfAnswer& answer) const {
+  if (k <= 0 || group >= self_groups()) return;
+  // The group's points (a leaf of this tree, or every point of a set without one): their
+  // coordinates, their indices (none: the position is the index) and their box.
+  const double* xyz = points_.data();  // row-major x, y, z
+  const int32_t* original = nullptr;
+  auto queries = static_cast<uint32_t>(points_.rows());
+  std::array<double, 3> lo{}, hi{};
+  if (tree_) {
+    const Tree::Cell& own = tree_->cells[static_cast<size_t>(tree_->leaves[group])];
+    xyz = &tree_->xyz[3 * static_cast<size_t>(own.begin)];
+    original = &tree_->original[own.begin];
+    queries = own.end - own.begin;
+    lo = own.lo;
+    hi = own.hi;
+  } else {
+    for (size_t d = 0; d < 3; ++d) {
+      lo[d] = points_.col(static_cast<Eigen::Index>(d)).minCoeff();
+      hi[d] = points_.col(static_cast<Eigen::Index>(d)).maxCoeff();
+    }
+  }
+  auto index_of = [&](uint32_t qi) {
+    return static_cast<Eigen::Index>(original != nullptr ? original[qi] : qi);
+  };
+  if (other.size() == 0) {
+    for (uint32_t qi = 0; qi < queries; ++qi) answer(index_of(qi), nullptr, 0);
+    return;
+  }
+  const auto wanted = std::min(static_cast<size_t>(k), static_cast<size_t>(other.size()));
+  scratch.resize(static_cast<size_t>(queries) * wanted);
+  if (!other.tree_) {
+    // A set too small for a tree: each point ranks it, several at once.
+    for (uint32_t qi = 0; qi < queries; qi += kSmallSetBatch) {
+      const size_t m = std::min<size_t>(kSmallSetBatch, queries - qi);
+      small_set_knn_batch(other.points_.data(), static_cast<size_t>(other.size()), &xyz[3 * qi], m,
+                          wanted, &scratch[qi * wanted]);
+    }
+    for (uint32_t qi = 0; qi < queries; ++qi) {
+      answer(index_of(qi), &scratch[qi * wanted], wanted);
+    }
+    return;
+  }
+  using Cell = Tree::Cell;
+  const Tree& t = *other.tree_;
+  static_assert(kLeafSize <= kSmallSetSize);
+  std::array<size_t, kSmallSetSize> count{};
+  // Point qi's bound: its k-th squared distance once it has k neighbours.
+  auto full = [&](uint32_t qi) { return count[qi] == wanted; };
+  auto kth = [&](uint32_t qi) { return scratch[qi * wanted + wanted - 1].sq_dist; };
+  auto visit = [&](const Cell& leaf) {
+    std::array<double, kLeafSize> d{};
+    const uint32_t n = leaf.end - leaf.begin;
+    for (uint32_t qi = 0; qi < queries; ++qi) {
+      const double* q = &xyz[3 * qi];
+      if (full(qi) && Tree::point_box_distance(q, leaf) > widen(kth(qi))) continue;
+      const double limit = full(qi) ? kth(qi) : std::numeric_limits<double>::infinity();
+      uint32_t mask = leaf_candidates(&t.xyz[3 * leaf.begin], n, q, limit, d.data());
+      Neighbor* best = &scratch[qi * wanted];
+      if (count[qi] == 0) {
+        // The first leaf: every candidate placed by counting, not inserted.
+        count[qi] = rank_nearest(d.data(), &t.original[leaf.begin], n, wanted,
+                                 std::numeric_limits<double>::infinity(), best);
+        continue;
+      }
+      NearestSet set(best, wanted, count[qi]);
+      while (mask != 0) {
+        const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
+        mask &= mask - 1;
+        set.add(d[j], t.original[leaf.begin + j]);
+      }
+      count[qi] = set.size();
+    }
+  };
+  // The largest k-th distance of the group's points (infinite while one has fewer than k).
+  auto group_bound = [&]() {
+    double bound = 0.0;
+    for (uint32_t qi = 0; qi < queries; ++qi) {
+      if (!full(qi)) return std::numeric_limits<double>::infinity();
+      bound = std::max(bound, kth(qi));
+    }
+    return bound;
+  };
+  auto distance_to = [&](const Cell& c) {
+    return squared_box_distance(lo.data(), hi.data(), c.lo.data(), c.hi.data());
+  };
+  double bound = group_bound();
+  thread_local std::vector<int32_t> stack;
+  stack.assign(1, 0);
+  while (!stack.empty()) {
+    const Cell& cell = t.cells[static_cast<size_t>(stack.back())];
+    stack.pop_back();
+    if (distance_to(cell) > widen(bound)) continue;
+    if (cell.child[0] < 0) {
+      visit(cell);
+      bound = group_bound();
+      continue;
+    }
+    // The nearer child is visited first (pushed last).
+    const int32_t a = cell.child[0], b = cell.child[1];
+    const bool a_first = distance_to(t.cells[static_cast<size_t>(a)]) <=
+                         distance_to(t.cells[static_cast<size_t>(b)]);
+    stack.push_back(a_first ? b : a);
+    stack.push_back(a_first ? a : b);
+  }
+  for (uint32_t qi = 0; qi < queries; ++qi) answer(index_of(qi), &scratch[qi * wanted], count[qi]);
+}
+
 }  // namespace dynscope

@@ -103,6 +103,16 @@ class KdIndex {
   void knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
                 const SelfAnswer& answer) const;
 
+  /// For every point of group `group` (as knn_self's groups), what other.knn(point(i), k) returns:
+  /// its k nearest points of `other` (another set, e.g. the same object's points at a coarser
+  /// level). Calls answer(i, nearest, count) once per point of the group. Faster than one knn() per
+  /// point when the group's points are near `other`'s: `other`'s tree is walked once per group
+  /// against the group's box and the largest k-th distance of its points, and each point skips the
+  /// leaves its own k-th distance cannot reach. `scratch` is the caller's buffer (one per thread);
+  /// groups may run concurrently. Nothing is called for k <= 0 or a group out of range.
+  void knn_other(size_t group, const KdIndex& other, int k, std::vector<Neighbor>& scratch,
+                 const SelfAnswer& answer) const;
+
  private:
   struct Tree;
 

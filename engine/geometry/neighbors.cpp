@@ -346,6 +346,32 @@ NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& qu
   return same_object_rows(query, query_ids, ObjectIndex(source, source_ids), k);
 }
 
+NeighborList knn_same_object(const ObjectIndex& queries, const ObjectIndex& sources, int k) {
+  check_k(k);
+  NeighborList out = empty_list(queries.size(), k);
+  // Every group of every query object that has source points (the others' rows stay masked).
+  std::vector<std::pair<const ObjectIndex::Object*, size_t>> groups;
+  std::vector<const ObjectIndex::Object*> source_of;  // per entry of `groups`
+  for (const ObjectIndex::Object& object : queries.objects()) {
+    const ObjectIndex::Object* source = sources.find(object.id);
+    if (source == nullptr) continue;
+    for (size_t g = 0; g < object.tree.self_groups(); ++g) {
+      groups.emplace_back(&object, g);
+      source_of.push_back(source);
+    }
+  }
+  for_each_group(groups.size(), queries.size(), [&](size_t i, std::vector<Neighbor>& scratch) {
+    const ObjectIndex::Object& object = *groups[i].first;
+    const ObjectIndex::Object& source = *source_of[i];
+    object.tree.knn_other(groups[i].second, source.tree, k, scratch,
+                          [&](Eigen::Index local, const Neighbor* found, size_t count) {
+                            write_row(out, object.global[static_cast<size_t>(local)], found, count,
+                                      &source.global);
+                          });
+  });
+  return out;
+}
+
 NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,
                              const ObjectIndex& source, int k) {
   check_k(k);

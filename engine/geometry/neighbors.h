@@ -64,6 +64,11 @@ class ObjectIndex {
 NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,
                              const Points& source, const std::vector<int32_t>& source_ids, int k);
 
+/// knn_same_object with the queries given by their own index (its points, in its indexing, e.g.
+/// a finer level's points asking a coarser level's): the same result, each object's queries
+/// answered a leaf of their tree at a time (KdIndex::knn_other). Throws ValueError for k <= 0.
+NeighborList knn_same_object(const ObjectIndex& queries, const ObjectIndex& sources, int k);
+
 /// knn_same_object over prebuilt source trees (same result). Throws ValueError on size mismatch,
 /// k <= 0 or a non-finite query point.
 NeighborList knn_same_object(const Points& query, const std::vector<int32_t>& query_ids,

@@ -81,6 +81,14 @@ class LevelIndex {
     return knn_all(query.points, *all_, o.k);
   }
 
+  // This level's points' same-object kNN from the finer level's points (its up list), the finer
+  // level's trees grouping the queries; plain kNN for the flat baseline.
+  NeighborList up_list(const HierarchyOptions& o, const LevelIndex& finer,
+                       const HierarchyLevel& finer_level) const {
+    if (objects_) return knn_same_object(*finer.objects_, *objects_, o.k);
+    return knn_all(finer_level.points, *all_, o.k);
+  }
+
   // The level's per-object trees (object-centric levels only).
   const ObjectIndex* objects() const { return objects_.get(); }
 
@@ -145,10 +153,11 @@ void build_levels(const Points& points, const std::vector<int32_t>& object_ids,
       }
     }
     if (l == 0) {
-      level.same = cached ? cache->same_object_list(slot(l, LevelList::kSame), level.points,
-                                                    level.object_ids, origin, level.points,
-                                                    *index->objects(), origin, options.k)
-                          : index->object_list(options, level);
+      level.same =
+          cached ? cache->same_object_list(slot(l, LevelList::kSame), level.points,
+                                           level.object_ids, origin, level.points,
+                                           *index->objects(), origin, options.k, index->objects())
+                 : index->object_list(options, level);
     } else {
       // Every point of this level is point kept[i] of the previous one, with its object id, and
       // the down, up and same lists share K and their sources' indexing. So two of the three are
@@ -157,10 +166,11 @@ void build_levels(const Points& points, const std::vector<int32_t>& object_ids,
       // kept rows (queries among the previous level's points, sources this level's).
       const HierarchyLevel& prev = h.levels[static_cast<size_t>(l - 1)];
       level.down = select_list_rows(prev.same, level.kept);
-      level.up = cached ? cache->same_object_list(slot(l, LevelList::kUp), prev.points,
-                                                  prev.object_ids, prev_origin, level.points,
-                                                  *index->objects(), origin, options.k)
-                        : index->object_list(options, prev);
+      const LevelIndex& finer = *indices[static_cast<size_t>(l - 1)];
+      level.up = cached ? cache->same_object_list(
+                              slot(l, LevelList::kUp), prev.points, prev.object_ids, prev_origin,
+                              level.points, *index->objects(), origin, options.k, finer.objects())
+                        : index->up_list(options, finer, prev);
       level.same = select_list_rows(level.up, level.kept);
     }
   }

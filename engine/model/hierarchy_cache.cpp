@@ -70,7 +70,8 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
                                               const std::vector<int32_t>& query_origin,
                                               const Points& source_points,
                                               const ObjectIndex& sources,
-                                              const std::vector<int32_t>& source_origin, int k) {
+                                              const std::vector<int32_t>& source_origin, int k,
+                                              const ObjectIndex* queries) {
   NeighborList out;
   out.index = IndexMatrix::Constant(query.rows(), k, -1);
   out.mask = MaskMatrix::Zero(query.rows(), k);
@@ -85,6 +86,9 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
   };
   struct Plan {
     const ObjectIndex::Object* object;
+    // With every row searched and the queries indexed: the queries' object (its local indices
+    // ascend with the rows, as `rows` do), answered a leaf at a time; else nullptr.
+    const ObjectIndex::Object* query_object;
     std::vector<Eigen::Index> rows;
     Points current;  // query points, then source points
     Mode mode;
@@ -115,7 +119,7 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
         cached = &e;
       }
     }
-    Plan plan{object, std::move(rows), {}, Mode::kSearch, next.size(), {}};
+    Plan plan{object, nullptr, std::move(rows), {}, Mode::kSearch, next.size(), {}};
     if (cached == nullptr) {
       // Points that were not there at the last step (a new object, or the voxel grid kept other
       // points of a moving one): a plain search, remembering the points. Only a list whose points
@@ -156,18 +160,25 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
         searched_rows_ += static_cast<int64_t>(uncertified);
       }
     }
+    if (queries != nullptr && plan.mode != Mode::kReuse) {
+      const ObjectIndex::Object* own = queries->find(id);
+      if (own != nullptr && own->global.size() == nq) plan.query_object = own;
+    }
     plan.current = std::move(current);
     plans.push_back(std::move(plan));
   }
 
-  // Then every row of every object in one parallel loop over runs of up to KdIndex::kBatchRows
-  // rows of one object (objects are often too small for a parallel loop of their own); a run's
-  // searches go to its object's index together (KdIndex::knn_rows).
+  // Then every row of every object in one parallel loop over runs (objects are often too small for
+  // a parallel loop of their own): of an object with indexed queries, one leaf of its queries
+  // (KdIndex::knn_other); of the others, up to KdIndex::kBatchRows rows, whose searches go to the
+  // object's index together (KdIndex::knn_rows).
   constexpr size_t kRun = KdIndex::kBatchRows;
   std::vector<int64_t> offset(plans.size() + 1, 0);  // each plan's first run
   int64_t total = 0;
   for (size_t p = 0; p < plans.size(); ++p) {
-    offset[p + 1] = offset[p] + static_cast<int64_t>((plans[p].rows.size() + kRun - 1) / kRun);
+    const size_t runs = plans[p].query_object != nullptr ? plans[p].query_object->tree.self_groups()
+                                                         : (plans[p].rows.size() + kRun - 1) / kRun;
+    offset[p + 1] = offset[p] + static_cast<int64_t>(runs);
     total += static_cast<int64_t>(plans[p].rows.size());
   }
   const int64_t runs = offset.back();
@@ -181,6 +192,34 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
       const Plan& plan = plans[p];
       Entry& entry = next[plan.entry];
       const std::vector<int32_t>& global = plan.object->global;
+      const bool anchor = plan.mode == Mode::kAnchor;
+      const int width = anchor ? entry.width : k;
+      // Writes row i's found neighbours (`stride` of them) and, when anchoring, its entry.
+      auto store = [&](size_t i, const Neighbor* nearest, size_t stride) {
+        const Eigen::Index row = plan.rows[i];
+        const size_t kept = std::min(stride, static_cast<size_t>(k));
+        int32_t* index = out.index.data() + row * k;  // row-major rows of k
+        for (size_t j = 0; j < kept; ++j) index[j] = global[static_cast<size_t>(nearest[j].index)];
+        std::fill_n(out.mask.data() + row * k, kept, uint8_t{1});
+        if (!anchor) return;
+        int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
+        double last = 0.0;
+        for (size_t j = 0; j < stride; ++j) {
+          stored[j] = nearest[j].index;
+          const double d = std::sqrt(nearest[j].sq_dist);
+          if (j > 0) entry.gap[i] = std::min(entry.gap[i], d - last);
+          last = d;
+        }
+        entry.farthest[i] = last;
+      };
+      if (plan.query_object != nullptr) {
+        plan.query_object->tree.knn_other(
+            static_cast<size_t>(r - offset[p]), plan.object->tree, width, found,
+            [&](Eigen::Index local, const Neighbor* nearest, size_t count) {
+              store(static_cast<size_t>(local), nearest, count);
+            });
+        continue;
+      }
       const size_t begin = static_cast<size_t>(r - offset[p]) * kRun;
       const size_t end = std::min(begin + kRun, plan.rows.size());
       size_t count = 0;
@@ -201,29 +240,9 @@ NeighborList HierarchyCache::same_object_list(int slot, const Points& query,
         searched[count++] = i;
       }
       if (count == 0) continue;
-      const bool anchor = plan.mode == Mode::kAnchor;
-      const int width = anchor ? entry.width : k;
       found.resize(count * static_cast<size_t>(width));
       const size_t stride = plan.object->tree.knn_rows(queries.data(), count, width, found.data());
-      const size_t kept = std::min(stride, static_cast<size_t>(k));
-      for (size_t c = 0; c < count; ++c) {
-        const size_t i = searched[c];
-        const Eigen::Index row = plan.rows[i];
-        const Neighbor* nearest = found.data() + c * stride;
-        int32_t* index = out.index.data() + row * k;  // row-major rows of k
-        for (size_t j = 0; j < kept; ++j) index[j] = global[static_cast<size_t>(nearest[j].index)];
-        std::fill_n(out.mask.data() + row * k, kept, uint8_t{1});
-        if (!anchor) continue;
-        int32_t* stored = &entry.nearest[i * static_cast<size_t>(entry.width)];
-        double last = 0.0;
-        for (size_t j = 0; j < stride; ++j) {
-          stored[j] = nearest[j].index;
-          const double d = std::sqrt(nearest[j].sq_dist);
-          if (j > 0) entry.gap[i] = std::min(entry.gap[i], d - last);
-          last = d;
-        }
-        entry.farthest[i] = last;
-      }
+      for (size_t c = 0; c < count; ++c) store(searched[c], found.data() + c * stride, stride);
     }
   });
   previous = std::move(next);

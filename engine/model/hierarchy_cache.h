@@ -39,12 +39,15 @@ class HierarchyCache {
   /// computed under the same `slot` (one slot per list of a hierarchy). `query_origin` `[M]` and
   /// `source_origin` `[N]` name each query and source point by a stable index (its level-0 point),
   /// so that a list is only reused between the same points; `source_points` `[N,3]` are the points
-  /// `sources` indexes.
+  /// `sources` indexes. `queries`, when given, indexes exactly `query` with `query_ids` (the
+  /// finer level's own index): an object whose rows are all searched is then answered a leaf of
+  /// its queries at a time (knn_same_object over both indices), the same lists.
   NeighborList same_object_list(int slot, const Points& query,
                                 const std::vector<int32_t>& query_ids,
                                 const std::vector<int32_t>& query_origin,
                                 const Points& source_points, const ObjectIndex& sources,
-                                const std::vector<int32_t>& source_origin, int k);
+                                const std::vector<int32_t>& source_origin, int k,
+                                const ObjectIndex* queries = nullptr);
 
  private:
   // One object's anchor for one list: its query and source points (by origin and position) when

@@ -255,6 +255,16 @@ TEST(NeighborsTest, CrossLevelQueriesEqualBruteForce) {
                    brute_force_knn(fine.points, fine.ids, coarse.points, coarse.ids, k,
                                    Relation::kSameObject),
                    what + " up");
+      // The same lists with the queries given by their own index (a leaf of queries at a time).
+      const ObjectIndex fine_index(fine.points, fine.ids), coarse_index(coarse.points, coarse.ids);
+      expect_equal(knn_same_object(coarse_index, fine_index, k),
+                   brute_force_knn(coarse.points, coarse.ids, fine.points, fine.ids, k,
+                                   Relation::kSameObject),
+                   what + " down, indexed queries");
+      expect_equal(knn_same_object(fine_index, coarse_index, k),
+                   brute_force_knn(fine.points, fine.ids, coarse.points, coarse.ids, k,
+                                   Relation::kSameObject),
+                   what + " up, indexed queries");
       expect_equal(knn_other_objects(fine.points, fine.ids, coarse.points, coarse.ids, k, 0.5),
                    brute_force_knn(fine.points, fine.ids, coarse.points, coarse.ids, k,
                                    Relation::kOtherObject, 0.5),
@@ -321,6 +331,43 @@ void expect_value_error(F&& f, const std::string& name) {
   } catch (const ValueError& e) {
     EXPECT_EQ(e.name(), name) << e.what();
   }
+}
+
+// Indexed queries into another index of the same objects on lattices full of exact ties and
+// duplicates, objects with and without trees on either side, K below and above the leaf (24) and
+// the sets' sizes, and a query object without source points (its rows masked).
+TEST(NeighborsTest, IndexedQueriesEqualBruteForceWithTiesAndDuplicates) {
+  Cloud a, b;
+  auto lattice = [](Cloud& c, int32_t id, int n, double step, const Vec3& origin, int copies) {
+    for (int i = 0; i < n; ++i) {
+      const Vec3 p = origin + step * Vec3(i % 5, (i / 5) % 5, i / 25);
+      for (int c_i = 0; c_i < copies; ++c_i) {
+        c.points.conservativeResize(c.points.rows() + 1, 3);
+        c.points.row(c.points.rows() - 1) = p.transpose();
+        c.ids.push_back(id);
+      }
+    }
+  };
+  lattice(a, 1, 120, 0.1, Vec3(0, 0, 0), 2);   // 240 points, every one twice: a tree
+  lattice(a, 2, 20, 0.1, Vec3(5, 0, 0), 1);    // 20: no tree
+  lattice(a, 3, 30, 0.1, Vec3(-5, 0, 0), 1);   // no source points
+  lattice(b, 1, 60, 0.2, Vec3(0, 0, 0), 1);    // 60: a tree
+  lattice(b, 2, 100, 0.05, Vec3(5, 0, 0), 1);  // 100: a tree
+  lattice(b, 7, 10, 0.1, Vec3(9, 0, 0), 1);    // no queries
+  const ObjectIndex a_index(a.points, a.ids), b_index(b.points, b.ids);
+  for (const int k : {1, 4, 16, 30, 70, 300}) {
+    const std::string what = "k " + std::to_string(k);
+    expect_equal(knn_same_object(a_index, b_index, k),
+                 brute_force_knn(a.points, a.ids, b.points, b.ids, k, Relation::kSameObject),
+                 what + " a into b");
+    expect_equal(knn_same_object(b_index, a_index, k),
+                 brute_force_knn(b.points, b.ids, a.points, a.ids, k, Relation::kSameObject),
+                 what + " b into a");
+    expect_equal(knn_same_object(a_index, a_index, k),
+                 brute_force_knn(a.points, a.ids, a.points, a.ids, k, Relation::kSameObject),
+                 what + " a into itself");
+  }
+  expect_value_error([&] { knn_same_object(a_index, b_index, 0); }, "k");
 }
 
 TEST(NeighborsTest, SharedIndicesGiveTheSameListsAsTheOneShotFunctions) {
