@@ -116,6 +116,8 @@ void generate_missing_datasets(const TrainOptions& options) {
     g.count = d.count;
     g.seed = d.seed;
     g.frame_rate_hz = d.frame_rate_hz;
+    g.hide_outcome_frames = d.hide_outcome_frames;
+    g.balance = d.balance;
     g.out_dir = d.out;
     g.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     std::printf("generating %lld %s scenes (seed %llu) into %s\n", static_cast<long long>(g.count),

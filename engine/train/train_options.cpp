@@ -71,6 +71,8 @@ std::string TrainOptions::to_json() const {
       nlohmann::json entry = {
           {"out", d.out}, {"scenario", d.scenario}, {"count", d.count}, {"seed", d.seed}};
       if (d.frame_rate_hz != 0) entry["frame_rate_hz"] = d.frame_rate_hz;
+      if (d.hide_outcome_frames != 0) entry["hide_outcome_frames"] = d.hide_outcome_frames;
+      if (d.balance) entry["balance"] = true;
       list.push_back(entry);
     }
     j["datasets"] = list;
@@ -120,8 +122,10 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
   if (!j.is_object()) throw FormatError(source, "recipe", "expected a JSON object");
   check_numbers(j, nlohmann::json::parse(TrainOptions().to_json()), source, "");
   if (j.contains("datasets") && j.at("datasets").is_array()) {
-    const nlohmann::json entry = {
-        {"count", int64_t{1}}, {"seed", uint64_t{0}}, {"frame_rate_hz", 0.0}};
+    const nlohmann::json entry = {{"count", int64_t{1}},
+                                  {"seed", uint64_t{0}},
+                                  {"frame_rate_hz", 0.0},
+                                  {"hide_outcome_frames", 0}};
     for (size_t i = 0; i < j.at("datasets").size(); ++i) {
       const nlohmann::json& d = j.at("datasets").at(i);
       if (d.is_object()) check_numbers(d, entry, source, "datasets[" + std::to_string(i) + "].");
@@ -153,6 +157,8 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
         r.count = d.at("count").get<int64_t>();
         r.seed = d.value("seed", uint64_t{0});
         r.frame_rate_hz = d.value("frame_rate_hz", 0.0);
+        r.hide_outcome_frames = d.value("hide_outcome_frames", 0);
+        r.balance = d.value("balance", false);
         o.datasets.push_back(r);
       }
     }
