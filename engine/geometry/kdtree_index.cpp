@@ -265,6 +265,79 @@ struct KdIndex::Tree {
     if (gap2[0] + gap2[1] + gap2[2] <= result.bound()) descend(0, q, gap2, result);
   }
 
+  // Offers this tree's points to `queries` points (`q`, row-major x, y, z) lying in the box lo ..
+  // hi, keeping each point's `wanted` nearest, sorted, in best[qi·wanted ...] (count[qi] of them,
+  // which must start at 0; `queries` <= kSmallSetSize). The tree is walked once against the box and
+  // the largest k-th distance of the points (a cell is skipped only when no point can reach it, by
+  // monotone rounding as in descend); each point skips the leaves its own k-th distance cannot
+  // reach, computes a leaf's distances together and inserts only those within it, and ranks its
+  // first leaf by counting. `first`, when given, is visited before the walk and skipped in it.
+  void search_group(const double* q, uint32_t queries, const std::array<double, 3>& lo,
+                    const std::array<double, 3>& hi, size_t wanted, Neighbor* best, size_t* count,
+                    const Cell* first) const {
+    auto full = [&](uint32_t qi) { return count[qi] == wanted; };
+    auto kth = [&](uint32_t qi) { return best[qi * wanted + wanted - 1].sq_dist; };
+    // Offers every point of `leaf` to every point of the group whose k-th distance can reach it.
+    auto visit = [&](const Cell& leaf) {
+      std::array<double, kLeafSize> d{};
+      const uint32_t n = leaf.end - leaf.begin;
+      for (uint32_t qi = 0; qi < queries; ++qi) {
+        const double* p = &q[3 * qi];
+        if (full(qi) && point_box_distance(p, leaf) > widen(kth(qi))) continue;
+        // The leaf's distances, and its candidates at or below the k-th distance as a bit mask.
+        const double limit = full(qi) ? kth(qi) : std::numeric_limits<double>::infinity();
+        uint32_t mask = leaf_candidates(&xyz[3 * leaf.begin], n, p, limit, d.data());
+        Neighbor* own = &best[qi * wanted];
+        if (count[qi] == 0) {
+          // The first leaf: every candidate placed by counting, not inserted.
+          count[qi] = rank_nearest(d.data(), &original[leaf.begin], n, wanted,
+                                   std::numeric_limits<double>::infinity(), own);
+          continue;
+        }
+        // Only the candidates are inserted, in index order within the leaf.
+        NearestSet set(own, wanted, count[qi]);
+        while (mask != 0) {
+          const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
+          mask &= mask - 1;
+          set.add(d[j], original[leaf.begin + j]);
+        }
+        count[qi] = set.size();
+      }
+    };
+    // The largest k-th distance of the group's points (infinite while one has fewer than k).
+    auto group_bound = [&]() {
+      double bound = 0.0;
+      for (uint32_t qi = 0; qi < queries; ++qi) {
+        if (!full(qi)) return std::numeric_limits<double>::infinity();
+        bound = std::max(bound, kth(qi));
+      }
+      return bound;
+    };
+    auto distance_to = [&](const Cell& c) {
+      return squared_box_distance(lo.data(), hi.data(), c.lo.data(), c.hi.data());
+    };
+    if (first != nullptr) visit(*first);
+    double bound = group_bound();
+    thread_local std::vector<int32_t> stack;
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const Cell& cell = cells[static_cast<size_t>(stack.back())];
+      stack.pop_back();
+      if (&cell == first || distance_to(cell) > widen(bound)) continue;
+      if (cell.child[0] < 0) {
+        visit(cell);
+        bound = group_bound();
+        continue;
+      }
+      // The nearer child is visited first (pushed last).
+      const int32_t a = cell.child[0], b = cell.child[1];
+      const bool a_first =
+          distance_to(cells[static_cast<size_t>(a)]) <= distance_to(cells[static_cast<size_t>(b)]);
+      stack.push_back(a_first ? b : a);
+      stack.push_back(a_first ? a : b);
+    }
+  }
+
   std::vector<double> xyz;        // the points in leaf order (x, y, z per storage slot)
   std::vector<int32_t> original;  // input index of the point in each storage slot
   std::vector<Cell> cells;        // cells[0] is the root
@@ -492,70 +565,13 @@ void KdIndex::knn_self(size_t group, int k, std::vector<Neighbor>& scratch,
     }
     return;
   }
-  using Cell = Tree::Cell;
   const Tree& t = *tree_;
-  const Cell& own = t.cells[static_cast<size_t>(t.leaves[group])];
+  const Tree::Cell& own = t.cells[static_cast<size_t>(t.leaves[group])];
   const uint32_t queries = own.end - own.begin;
   scratch.resize(static_cast<size_t>(queries) * wanted);
   std::array<size_t, kLeafSize> count{};
-  // Offers every point of `leaf` to every query of the group whose k-th distance can reach it.
-  auto visit = [&](const Cell& leaf) {
-    std::array<double, kLeafSize> d{};
-    const uint32_t n = leaf.end - leaf.begin;
-    for (uint32_t qi = 0; qi < queries; ++qi) {
-      const double* q = &t.xyz[3 * (own.begin + qi)];
-      Neighbor* best = &scratch[qi * wanted];
-      size_t c = count[qi];
-      const bool full = c == wanted;
-      if (full && Tree::point_box_distance(q, leaf) > widen(best[wanted - 1].sq_dist)) continue;
-      // The leaf's distances, and its candidates at or below the k-th distance as a bit mask.
-      const double limit =
-          full ? best[wanted - 1].sq_dist : std::numeric_limits<double>::infinity();
-      uint32_t mask = leaf_candidates(&t.xyz[3 * leaf.begin], n, q, limit, d.data());
-      if (c == 0) {
-        // The first leaf (the group's own): every candidate placed by counting, not inserted.
-        count[qi] = rank_nearest(d.data(), &t.original[leaf.begin], n, wanted,
-                                 std::numeric_limits<double>::infinity(), best);
-        continue;
-      }
-      // Only the candidates are inserted, in index order within the leaf.
-      NearestSet set(best, wanted, c);
-      while (mask != 0) {
-        const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
-        mask &= mask - 1;
-        set.add(d[j], t.original[leaf.begin + j]);
-      }
-      count[qi] = set.size();
-    }
-  };
-  // The largest k-th distance of the group's queries (infinite while one has fewer than k).
-  auto group_bound = [&]() {
-    double bound = 0.0;
-    for (uint32_t qi = 0; qi < queries; ++qi) {
-      if (count[qi] < wanted) return std::numeric_limits<double>::infinity();
-      bound = std::max(bound, scratch[qi * wanted + wanted - 1].sq_dist);
-    }
-    return bound;
-  };
-  visit(own);
-  double bound = group_bound();
-  std::vector<int32_t> stack{0};
-  while (!stack.empty()) {
-    const Cell& cell = t.cells[static_cast<size_t>(stack.back())];
-    stack.pop_back();
-    if (&cell == &own || Tree::box_distance(own, cell) > widen(bound)) continue;
-    if (cell.child[0] < 0) {
-      visit(cell);
-      bound = group_bound();
-      continue;
-    }
-    // The nearer child is visited first (pushed last).
-    const int32_t a = cell.child[0], b = cell.child[1];
-    const bool a_first = Tree::box_distance(own, t.cells[static_cast<size_t>(a)]) <=
-                         Tree::box_distance(own, t.cells[static_cast<size_t>(b)]);
-    stack.push_back(a_first ? b : a);
-    stack.push_back(a_first ? a : b);
-  }
+  t.search_group(&t.xyz[3 * static_cast<size_t>(own.begin)], queries, own.lo, own.hi, wanted,
+                 scratch.data(), count.data(), &own);
   for (uint32_t qi = 0; qi < queries; ++qi) {
     answer(t.original[own.begin + qi], &scratch[qi * wanted], count[qi]);
   }
@@ -604,68 +620,9 @@ void KdIndex::knn_other(size_t group, const KdIndex& other, int k, std::vector<N
     }
     return;
   }
-  using Cell = Tree::Cell;
-  const Tree& t = *other.tree_;
   static_assert(kLeafSize <= kSmallSetSize);
   std::array<size_t, kSmallSetSize> count{};
-  // Point qi's bound: its k-th squared distance once it has k neighbours.
-  auto full = [&](uint32_t qi) { return count[qi] == wanted; };
-  auto kth = [&](uint32_t qi) { return scratch[qi * wanted + wanted - 1].sq_dist; };
-  auto visit = [&](const Cell& leaf) {
-    std::array<double, kLeafSize> d{};
-    const uint32_t n = leaf.end - leaf.begin;
-    for (uint32_t qi = 0; qi < queries; ++qi) {
-      const double* q = &xyz[3 * qi];
-      if (full(qi) && Tree::point_box_distance(q, leaf) > widen(kth(qi))) continue;
-      const double limit = full(qi) ? kth(qi) : std::numeric_limits<double>::infinity();
-      uint32_t mask = leaf_candidates(&t.xyz[3 * leaf.begin], n, q, limit, d.data());
-      Neighbor* best = &scratch[qi * wanted];
-      if (count[qi] == 0) {
-        // The first leaf: every candidate placed by counting, not inserted.
-        count[qi] = rank_nearest(d.data(), &t.original[leaf.begin], n, wanted,
-                                 std::numeric_limits<double>::infinity(), best);
-        continue;
-      }
-      NearestSet set(best, wanted, count[qi]);
-      while (mask != 0) {
-        const auto j = static_cast<uint32_t>(__builtin_ctz(mask));
-        mask &= mask - 1;
-        set.add(d[j], t.original[leaf.begin + j]);
-      }
-      count[qi] = set.size();
-    }
-  };
-  // The largest k-th distance of the group's points (infinite while one has fewer than k).
-  auto group_bound = [&]() {
-    double bound = 0.0;
-    for (uint32_t qi = 0; qi < queries; ++qi) {
-      if (!full(qi)) return std::numeric_limits<double>::infinity();
-      bound = std::max(bound, kth(qi));
-    }
-    return bound;
-  };
-  auto distance_to = [&](const Cell& c) {
-    return squared_box_distance(lo.data(), hi.data(), c.lo.data(), c.hi.data());
-  };
-  double bound = group_bound();
-  thread_local std::vector<int32_t> stack;
-  stack.assign(1, 0);
-  while (!stack.empty()) {
-    const Cell& cell = t.cells[static_cast<size_t>(stack.back())];
-    stack.pop_back();
-    if (distance_to(cell) > widen(bound)) continue;
-    if (cell.child[0] < 0) {
-      visit(cell);
-      bound = group_bound();
-      continue;
-    }
-    // The nearer child is visited first (pushed last).
-    const int32_t a = cell.child[0], b = cell.child[1];
-    const bool a_first = distance_to(t.cells[static_cast<size_t>(a)]) <=
-                         distance_to(t.cells[static_cast<size_t>(b)]);
-    stack.push_back(a_first ? b : a);
-    stack.push_back(a_first ? a : b);
-  }
+  other.tree_->search_group(xyz, queries, lo, hi, wanted, scratch.data(), count.data(), nullptr);
   for (uint32_t qi = 0; qi < queries; ++qi) answer(index_of(qi), &scratch[qi * wanted], count[qi]);
 }
 

@@ -28,27 +28,27 @@ split=${1:-test}
 data_root=${DYNSCOPE_CAMPAIGN_DATA:-data}
 scenarios=(drop collide roll dominoes support contain link)
 protocol=()  # the evaluation protocol's options beyond the data and split
+# generate_missing WHAT GENERATE_ARG ...: each scenario's scenes into $root/S, unless already there.
+generate_missing() {
+  local what=$1 s
+  shift
+  for s in "${scenarios[@]}"; do
+    if [ ! -f "$root/$s/manifest.json" ]; then
+      echo "generating the $what $s scenes into $root/$s"
+      "$dynscope" generate --scenario "$s" "$@" --out "$root/$s" --jobs 2
+    fi
+  done
+}
 case "$split" in
   test)
     root=$data_root/physion-test
     eval_split=all
-    for s in "${scenarios[@]}"; do
-      if [ ! -f "$root/$s/manifest.json" ]; then
-        echo "generating the held-out $s scenes into $root/$s"
-        "$dynscope" generate --scenario "$s" --count 24 --seed 3 --out "$root/$s" --jobs 2
-      fi
-    done
+    generate_missing held-out --count 24 --seed 3
     ;;
   hidden)
     root=$data_root/physion-hidden
     eval_split=all
-    for s in "${scenarios[@]}"; do
-      if [ ! -f "$root/$s/manifest.json" ]; then
-        echo "generating the hidden-outcome $s scenes into $root/$s"
-        "$dynscope" generate --scenario "$s" --count 48 --seed 4 --hide-outcome 14 --balance \
-          --out "$root/$s" --jobs 2
-      fi
-    done
+    generate_missing hidden-outcome --count 48 --seed 4 --hide-outcome 14 --balance
     protocol=(--observed 14 --threshold-fraction 1.5 --scenario-threshold-fraction drop=1
       --scenario-threshold-fraction contain=1)
     ;;
