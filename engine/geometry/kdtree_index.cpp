@@ -318,8 +318,7 @@ struct KdIndex::Tree {
     };
     if (first != nullptr) visit(*first);
     double bound = group_bound();
-    thread_local std::vector<int32_t> stack;
-    stack.assign(1, 0);
+    std::vector<int32_t> stack{0};
     while (!stack.empty()) {
       const Cell& cell = cells[static_cast<size_t>(stack.back())];
       stack.pop_back();
