@@ -79,12 +79,19 @@ Rollout run_baseline_rollout(const Scene& scene, const ModelPoints& points,
                      options);
 }
 
+namespace {
+// The contact threshold of scenes without one of their own.
+double default_contact_threshold(const EvalOptions& options, double voxel) {
+  return options.contact_threshold > 0 ? options.contact_threshold
+                                       : options.threshold_fraction * voxel;
+}
+}  // namespace
+
 double contact_threshold_for(const EvalOptions& options, const std::string& scenario,
                              double voxel) {
   const auto own = options.scenario_threshold_fraction.find(scenario);
   if (own != options.scenario_threshold_fraction.end()) return own->second * voxel;
-  return options.contact_threshold > 0 ? options.contact_threshold
-                                       : options.threshold_fraction * voxel;
+  return default_contact_threshold(options, voxel);
 }
 
 SceneEvaluation evaluate_scene(const DatasetItem& item, const StepPredictor& model,
@@ -94,7 +101,7 @@ SceneEvaluation evaluate_scene(const DatasetItem& item, const StepPredictor& mod
     const ModelPoints points = build_model_points(scene, options.sampling);
     const double contact = contact_threshold_for(options, scene.scenario, points.voxel);
     if (voxel) *voxel = points.voxel;
-    if (threshold) *threshold = contact_threshold_for(options, "", points.voxel);
+    if (threshold) *threshold = default_contact_threshold(options, points.voxel);
     RolloutOptions ro;
     ro.observed_frames = options.observed_frames;
     const Rollout m = run_rollout(scene, points, model, ro);

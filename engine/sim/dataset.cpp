@@ -58,6 +58,19 @@ bool meets_selection(const Scene& scene, const DatasetOptions& options, int64_t 
   return !options.balance || (first >= 0 ? 1 : 0) == balanced_outcome(index);
 }
 
+// What scene `index` must meet, in words (for the error when no draw does).
+std::string selection_text(const DatasetOptions& options, int64_t index) {
+  std::string text;
+  if (options.hide_outcome_frames > 0) {
+    text = "no contact in the first " + std::to_string(options.hide_outcome_frames) + " frames";
+  }
+  if (options.balance) {
+    text += (text.empty() ? "" : " and ") + std::string("outcome ") +
+            std::to_string(balanced_outcome(index));
+  }
+  return text;
+}
+
 std::string manifest_text(const DatasetOptions& options, const std::vector<std::string>& mesh_files,
                           const SimSetup& first, const DatasetSummary& summary) {
   using nlohmann::json;
@@ -235,14 +248,8 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
         Scene scene;
         for (int draw = 0;; ++draw) {
           if (draw == kMaxDraws) {
-            throw ValueError(
-                "hide_outcome",
-                e.file + ": none of " + std::to_string(kMaxDraws) +
-                    " draws met the selection (hide the outcome for " +
-                    std::to_string(options.hide_outcome_frames) + " frames" +
-                    (options.balance ? ", outcome " + std::to_string(balanced_outcome(i))
-                                     : std::string()) +
-                    ")");
+            throw ValueError("selection", e.file + ": none of " + std::to_string(kMaxDraws) +
+                                              " draws met " + selection_text(options, i));
           }
           e.seed = draw_seed(options.seed, i, draw);
           scene = generate_scene(options.scenario, e.seed, scenario_options);
