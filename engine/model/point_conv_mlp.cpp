@@ -97,10 +97,12 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
   float* pe = p1 + ph;
   for (int64_t q = begin; q < end; ++q) {
     std::fill(acc, acc + ct * j, 0.0f);
+    int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
       const int64_t e = q * k + n;
       const int64_t src = a.index[e];
       if (src < 0) continue;
+      ++nv;
       const float* r = a.rel + e * 3;
       first_layer(h1, r, a.w1, a.b1, hd);
       small_linear(h2, h1, hd, a.w2t, a.b2, hd, true);
@@ -116,6 +118,10 @@ DYNSCOPE_KERNEL_BODY void inference_rows_body(const InferenceArgs& a, float* out
         small_linear(pe, p1, ph, a.e2t, a.c2, p, false);
         add_outer(acc + c * j, pe, p, hk, width);
       }
+    }
+    if (a.linear && nv == 0) {  // a zero aggregate row, a zero linear
+      std::fill(out + q * a.n_out, out + (q + 1) * a.n_out, 0.0f);
+      continue;
     }
     float* o = a.linear ? row : out + q * j * ct;
     for (int64_t jj = 0; jj < j; ++jj) {
@@ -244,6 +250,12 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
     }
     linear = padded_linear.data();
   }
+  // With a linear, the rows that have neighbours go through it four at a time (`rows` holds the
+  // queries of the `pending` aggregate rows waiting in `row`); `four` takes the outputs of four
+  // queries that are not consecutive.
+  int64_t rows[4];
+  int pending = 0;
+  std::vector<float> four(linear ? static_cast<size_t>(4 * a.n_out) : 0);
   for (int64_t q = begin; q < end; ++q) {
     int64_t nv = 0;
     for (int64_t n = 0; n < k; ++n) {
@@ -266,9 +278,14 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
       std::fill(x + ct, x + cp, 0.0f);
       ++nv;
     }
-    const int64_t slot = (q - begin) % 4;
+    if (linear && nv == 0) {
+      // No neighbour: the aggregate row is zero and so is its linear (no bias inside the op).
+      // Relational lists leave most rows so.
+      std::fill(out + q * a.n_out, out + (q + 1) * a.n_out, 0.0f);
+      continue;
+    }
     // The aggregate row, [16][cp]: straight into the output when it has that layout.
-    float* o = (linear || padded) ? row + slot * 16 * cp : out + q * 16 * ct;
+    float* o = (linear || padded) ? row + pending * 16 * cp : out + q * 16 * ct;
     int64_t c0 = 0;
     for (; c0 + 16 <= cp; c0 += 16) aggregate_block<Lanes16>(o, cp, xs, cp, c0, hs, nv);
     if (c0 < cp) aggregate_block<Lanes8>(o, cp, xs, cp, c0, hs, nv);
@@ -278,13 +295,24 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
           std::copy(o + jj * cp, o + jj * cp + ct, out + (q * 16 + jj) * ct);
         }
       }
-    } else if (slot == 3) {
-      apply_linear4(out + (q - 3) * a.n_out, row, 16 * cp, linear, a.n_out);
-    } else if (q + 1 == end) {
-      for (int64_t r = 0; r <= slot; ++r) {
-        apply_linear(out + (q - slot + r) * a.n_out, row + r * 16 * cp, 16 * cp, linear, a.n_out);
-      }
+      continue;
     }
+    rows[pending++] = q;
+    if (pending == 4) {
+      if (rows[3] == rows[0] + 3) {
+        apply_linear4(out + rows[0] * a.n_out, row, 16 * cp, linear, a.n_out);
+      } else {
+        apply_linear4(four.data(), row, 16 * cp, linear, a.n_out);
+        for (int r = 0; r < 4; ++r) {
+          std::copy(four.data() + r * a.n_out, four.data() + (r + 1) * a.n_out,
+                    out + rows[r] * a.n_out);
+        }
+      }
+      pending = 0;
+    }
+  }
+  for (int r = 0; r < pending; ++r) {
+    apply_linear(out + rows[r] * a.n_out, row + r * 16 * cp, 16 * cp, linear, a.n_out);
   }
 }
 

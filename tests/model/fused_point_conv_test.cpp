@@ -305,47 +305,62 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
 // gradients (the linear inside the op, four queries at a time: 50 queries leave two over) for
 // output counts below, at and past multiples of 4 and the kernels' channel arrangements; with
 // gradients (the two ops) the same values and a gradient in the linear's weight; a weight of
-// the wrong shape is refused.
+// the wrong shape is refused. Each case also runs with a third of the rows left without
+// neighbours (as relational lists leave most rows), alone and in runs, inside and across groups
+// of four and at the end: those rows are exactly zero and the rows around them unchanged.
 TEST(FusedPointConvTest, TheMlpAggregationWithItsLinearMatchesTheTwoOps) {
-  for (int64_t c_mid : {16, 4}) {
-    for (bool gated : {false, true}) {
-      for (int64_t pos : {0, 8}) {
-        for (int64_t channels : {6, 8, 45}) {
-          ConvCase cs = make_conv_case(60, 50, 7, channels, 40 + c_mid + gated + pos + channels);
-          PointConv conv(PointConvOptions(channels, 9).c_mid(c_mid).pos_channels(pos));
-          NeighborTensors nb = cs.nb;
-          nb.prepare(cs.query, cs.source);
-          const torch::Tensor rel = nb.rel * 3.0f;
-          const torch::Tensor index = masked_index(nb);
-          const torch::Tensor gate =
-              gated ? torch::rand({nb.rows(), index.size(1)}) : torch::Tensor();
-          const int64_t n_in = c_mid * (channels + pos);
-          for (int64_t n_out : {1, 4, 9, 32}) {
-            const torch::Tensor weight = torch::randn({n_out, n_in});
-            torch::Tensor fused, ref;
-            {
-              torch::NoGradGuard no_grad;
-              fused = point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
-                                                      index, weight);
-              ref = torch::mm(
-                  point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index),
-                  weight.t());
+  const std::vector<int64_t> emptied{0, 2, 3, 4, 7, 9, 10, 11, 12, 13, 14, 20, 31, 45, 47, 48, 49};
+  for (bool sparse : {false, true}) {
+    for (int64_t c_mid : {16, 4}) {
+      for (bool gated : {false, true}) {
+        for (int64_t pos : {0, 8}) {
+          for (int64_t channels : {6, 8, 45}) {
+            ConvCase cs = make_conv_case(60, 50, 7, channels, 40 + c_mid + gated + pos + channels);
+            PointConv conv(PointConvOptions(channels, 9).c_mid(c_mid).pos_channels(pos));
+            NeighborTensors nb = cs.nb;
+            nb.prepare(cs.query, cs.source);
+            const torch::Tensor rel = nb.rel * 3.0f;
+            torch::Tensor index = masked_index(nb);
+            if (sparse) {
+              index = index.clone();
+              for (int64_t q : emptied) index[q].fill_(-1);
             }
-            ASSERT_EQ(fused.sizes(), ref.sizes());
-            EXPECT_TRUE(torch::allclose(fused, ref, 1e-4, 1e-5))
-                << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " channels "
-                << channels << " outputs " << n_out << ": " << (fused - ref).abs().max();
+            const torch::Tensor gate =
+                gated ? torch::rand({nb.rows(), index.size(1)}) : torch::Tensor();
+            const int64_t n_in = c_mid * (channels + pos);
+            for (int64_t n_out : {1, 4, 9, 32}) {
+              const torch::Tensor weight = torch::randn({n_out, n_in});
+              torch::Tensor fused, ref;
+              {
+                torch::NoGradGuard no_grad;
+                fused = point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
+                                                        index, weight);
+                ref = torch::mm(
+                    point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index),
+                    weight.t());
+              }
+              ASSERT_EQ(fused.sizes(), ref.sizes());
+              EXPECT_TRUE(torch::allclose(fused, ref, 1e-4, 1e-5))
+                  << "c_mid " << c_mid << " gated " << gated << " pos " << pos << " channels "
+                  << channels << " outputs " << n_out << " sparse " << sparse << ": "
+                  << (fused - ref).abs().max();
+              if (sparse) {
+                for (int64_t q : emptied) {
+                  EXPECT_TRUE(torch::equal(fused[q], torch::zeros({n_out}))) << "row " << q;
+                }
+              }
+            }
+            const torch::Tensor weight = torch::randn({3, n_in}).requires_grad_(true);
+            const torch::Tensor with_grad = point_conv_aggregate_mlp_linear(
+                cs.features, rel, conv->edge_mlps(), gate, index, weight);
+            EXPECT_TRUE(with_grad.requires_grad());
+            with_grad.sum().backward();
+            ASSERT_TRUE(weight.grad().defined());
+            EXPECT_GT(weight.grad().abs().sum().item<float>(), 0.0f);
+            EXPECT_THROW(point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
+                                                         index, torch::zeros({3, n_in + 1})),
+                         ValueError);
           }
-          const torch::Tensor weight = torch::randn({3, n_in}).requires_grad_(true);
-          const torch::Tensor with_grad = point_conv_aggregate_mlp_linear(
-              cs.features, rel, conv->edge_mlps(), gate, index, weight);
-          EXPECT_TRUE(with_grad.requires_grad());
-          with_grad.sum().backward();
-          ASSERT_TRUE(weight.grad().defined());
-          EXPECT_GT(weight.grad().abs().sum().item<float>(), 0.0f);
-          EXPECT_THROW(point_conv_aggregate_mlp_linear(cs.features, rel, conv->edge_mlps(), gate,
-                                                       index, torch::zeros({3, n_in + 1})),
-                       ValueError);
         }
       }
     }
