@@ -58,12 +58,16 @@ torch::Tensor ConvUnitImpl::reduce_input(const torch::Tensor& x) {
   return layer_norm_relu(r, reduce_norm->weight, reduce_norm->bias, reduce_norm->options.eps());
 }
 
+torch::Tensor ConvUnitImpl::finish_conv(const torch::Tensor& conv_out) {
+  const torch::Tensor c = conv_norm ? layer_norm_relu(conv_out, conv_norm->weight, conv_norm->bias,
+                                                      conv_norm->options.eps())
+                                    : torch::relu(conv_out);
+  return expand->forward(c);
+}
+
 torch::Tensor ConvUnitImpl::finish(const torch::Tensor& conv_out,
                                    const torch::Tensor& shortcut_in) {
-  torch::Tensor c = conv_norm ? layer_norm_relu(conv_out, conv_norm->weight, conv_norm->bias,
-                                                conv_norm->options.eps())
-                              : torch::relu(conv_out);
-  c = expand->forward(c);
+  torch::Tensor c = finish_conv(conv_out);
   const torch::Tensor s = shortcut ? shortcut->forward(shortcut_in) : shortcut_in;
   // In place: the sum and the ReLU overwrite a linear's output, which no backward reads.
   return c.add_(s).relu_();
@@ -76,6 +80,9 @@ torch::Tensor ConvUnitImpl::forward(const torch::Tensor& x, const torch::Tensor&
   if (!resample && query.size(0) != source.size(0)) {
     throw ValueError("conv_unit", "a non-resampling unit needs the query points to be the source");
   }
+  if (!resample && neighbors.active_list && !neighbors.gate.defined()) {
+    return forward_active(x, query, neighbors);
+  }
   const torch::Tensor r = reduce_input(x);
   const torch::Tensor nearest = resample ? neighbors.nearest() : torch::Tensor();
   torch::Tensor c;
@@ -86,6 +93,24 @@ torch::Tensor ConvUnitImpl::forward(const torch::Tensor& x, const torch::Tensor&
     c = gnn_conv->forward(query, source, r, r_query, neighbors);
   }
   return finish(c, resample ? x.index_select(0, nearest) : x);
+}
+
+// A convolution is zero on a row without neighbours, so such a row's output is
+// relu(x + e) with e = expand(norm(0)), the same e for every row: the reduction, convolution,
+// norm and expansion run on the active rows only (a relational list leaves most rows without
+// neighbours). Equal to the dense path up to the order of float sums.
+torch::Tensor ConvUnitImpl::forward_active(const torch::Tensor& x, const torch::Tensor& query,
+                                           const NeighborTensors& neighbors) {
+  const torch::Tensor zero = torch::zeros({1, mid_}, x.options());
+  const torch::Tensor idle = torch::relu((shortcut ? shortcut->forward(x) : x) + finish_conv(zero));
+  if (neighbors.active.size(0) == 0) return idle;
+  const NeighborTensors& list = *neighbors.active_list;
+  const torch::Tensor xa = x.index_select(0, neighbors.active);
+  const torch::Tensor qa = query.index_select(0, neighbors.active);
+  const torch::Tensor r = reduce_input(xa);
+  const torch::Tensor c =
+      point_conv ? point_conv->forward(qa, qa, r, list) : gnn_conv->forward(qa, qa, r, r, list);
+  return idle.index_copy(0, neighbors.active, finish(c, xa));
 }
 
 torch::Tensor ConvUnitImpl::forward_mesh(const torch::Tensor& x, const torch::Tensor& vertices,

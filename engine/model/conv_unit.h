@@ -71,7 +71,12 @@ class ConvUnitImpl : public torch::nn::Module {
 
  private:
   torch::Tensor reduce_input(const torch::Tensor& x);
+  /// expand(norm(conv_out)): the convolution's part of the output before the shortcut.
+  torch::Tensor finish_conv(const torch::Tensor& conv_out);
   torch::Tensor finish(const torch::Tensor& conv_out, const torch::Tensor& shortcut_in);
+  /// forward without resampling on a compacted list (NeighborTensors::compact).
+  torch::Tensor forward_active(const torch::Tensor& x, const torch::Tensor& query,
+                               const NeighborTensors& neighbors);
 
   ConvUnitOptions options_;
   int64_t mid_;

@@ -132,6 +132,7 @@ ModelInput concatenate_inputs(const std::vector<ModelInput>& inputs) {
     t.relational = concat_lists(
         lists([](const LevelTensors& x) -> const NeighborTensors& { return x.relational; }),
         offsets[li]);
+    t.relational.compact();
     if (l > 0) {
       t.down = concat_lists(
           lists([](const LevelTensors& x) -> const NeighborTensors& { return x.down; }),

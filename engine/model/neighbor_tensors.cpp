@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.h"
 
@@ -52,6 +53,51 @@ void NeighborTensors::prepare(const torch::Tensor& query, const torch::Tensor& s
   inv_count = inverse_count();  // from count and has_any, by the one formula
 }
 
+void NeighborTensors::compact(int64_t min_idle_rows) {
+  active = torch::Tensor();
+  active_list.reset();
+  if (rows() == 0 || !count.defined() || !rel.defined() || !index.device().is_cpu()) return;
+  const int64_t m = rows(), k = index.size(1);
+  const torch::Tensor idx = index.contiguous(), cnt = count.contiguous();
+  const int64_t* ip = idx.data_ptr<int64_t>();
+  const float* cp = cnt.data_ptr<float>();
+  // position[r]: place of row r among the rows with neighbours, −1 for the others.
+  std::vector<int64_t> position(static_cast<size_t>(m), -1), rows_with;
+  for (int64_t r = 0; r < m; ++r) {
+    if (cp[r] > 0) {
+      position[static_cast<size_t>(r)] = static_cast<int64_t>(rows_with.size());
+      rows_with.push_back(r);
+    }
+  }
+  const auto a = static_cast<int64_t>(rows_with.size());
+  if (a == m || m - a < min_idle_rows) return;
+  torch::Tensor sub_index = torch::empty({a, k}, idx.options());
+  int64_t* sp = sub_index.data_ptr<int64_t>();
+  for (int64_t i = 0; i < a; ++i) {
+    const int64_t* from = ip + rows_with[static_cast<size_t>(i)] * k;
+    for (int64_t n = 0; n < k; ++n) {
+      const int64_t src = from[n];
+      if (src < 0) {
+        sp[i * k + n] = -1;
+        continue;
+      }
+      // A source outside the rows with neighbours (or beyond the rows): no compaction.
+      if (src >= m || position[static_cast<size_t>(src)] < 0) return;
+      sp[i * k + n] = position[static_cast<size_t>(src)];
+    }
+  }
+  const torch::Tensor kept = torch::from_blob(rows_with.data(), {a}, idx.options()).clone();
+  auto list = std::make_shared<NeighborTensors>();
+  list->index = sub_index;
+  list->mask = mask.index_select(0, kept);
+  list->rel = rel.index_select(0, kept);
+  list->count = count.index_select(0, kept);
+  list->has_any = has_any.index_select(0, kept);
+  list->inv_count = inv_count.index_select(0, kept);
+  active = kept;
+  active_list = std::move(list);
+}
+
 NeighborTensors NeighborTensors::to(const torch::Device& device) const {
   NeighborTensors t;
   t.index = index.to(device);
@@ -63,6 +109,10 @@ NeighborTensors NeighborTensors::to(const torch::Device& device) const {
     t.inv_count = inv_count.to(device);
   }
   if (gate.defined()) t.gate = gate.to(device);
+  if (active_list) {
+    t.active = active.to(device);
+    t.active_list = std::make_shared<NeighborTensors>(active_list->to(device));
+  }
   return t;
 }
 
@@ -171,6 +221,7 @@ HierarchyTensors to_tensors(const Hierarchy& hierarchy, const torch::Device& dev
     t.radius = level.radius;
     t.same = prepared_tensors(level.same, level.points, level.points, device);
     t.relational = prepared_tensors(level.relational, level.points, level.points, device);
+    t.relational.compact();
     if (l > 0) {
       const Points& finer = hierarchy.levels[l - 1].points;
       t.down = prepared_tensors(level.down, level.points, finer, device);
