@@ -59,8 +59,10 @@ void on_compute_threads(const Work& work) {
     return;
   }
   std::exception_ptr failed;
+  // `master`, not `single`: `work` runs on the calling thread, with its thread-local state
+  // (LibTorch's grad mode among it); the other threads take tasks at the region's closing barrier.
 #pragma omp parallel num_threads(threads)
-#pragma omp single
+#pragma omp master
   {
     try {
       work();

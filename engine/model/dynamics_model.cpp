@@ -8,6 +8,7 @@
 #include <string>
 
 #include "engine/core/error.h"
+#include "engine/core/parallel.h"
 
 namespace dynscope {
 
@@ -185,7 +186,18 @@ torch::Tensor DynamicsModelImpl::forward(const ModelInput& input,
 }
 
 torch::Tensor DynamicsModelImpl::predict_delta(const ModelInput& input) {
-  const torch::Tensor target = forward(input) * target_std_ + target_mean_;
+  torch::Tensor target;
+  // Without gradients the pass runs in one region of the compute threads (on_compute_threads):
+  // the kernels' rows are tasks any of them takes, LibTorch's own ops and the BLAS run on this
+  // thread, so a core that another process keeps busy slows the pass instead of stalling it at
+  // every op's barrier. With gradients (training, explanations) the ops open their own loops.
+  const auto run = [&] { target = forward(input); };
+  if (torch::GradMode::is_enabled()) {
+    run();
+  } else {
+    on_compute_threads(run);
+  }
+  target = target * target_std_ + target_mean_;
   return config_.target == TargetMode::kAcceleration ? input.velocity + target : target;
 }
 
@@ -206,9 +218,13 @@ Points DynamicsModelImpl::predict_next(const PointState& state, HierarchyCache* 
   state.validate();
   torch::NoGradGuard no_grad;
   const torch::Device device = velocity_mean_.device();
-  const ModelInput input = make_model_input(state, build_hierarchy(state, cache), device);
-  const torch::Tensor delta =
-      hold_static_points(predict_delta(input), state).to(torch::kCPU, torch::kDouble).contiguous();
+  torch::Tensor delta;
+  on_compute_threads([&] {  // the hierarchy, the input and the pass in one region (predict_delta)
+    const ModelInput input = make_model_input(state, build_hierarchy(state, cache), device);
+    delta = hold_static_points(predict_delta(input), state)
+                .to(torch::kCPU, torch::kDouble)
+                .contiguous();
+  });
   Points out = state.position;
   out += Eigen::Map<const Points>(delta.data_ptr<double>(), state.size(), 3);  // + 0 keeps p(t)
   return out;

@@ -12,6 +12,7 @@
 
 #include "engine/core/error.h"
 #include "engine/core/isa_clones.h"
+#include "engine/core/threads.h"
 #include "engine/model/conv_implementation.h"
 
 namespace dynscope::fused_detail {
@@ -64,7 +65,7 @@ struct Partition {
 };
 
 inline Partition partition(int64_t rows) {
-  const int64_t threads = std::max<int64_t>(1, at::get_num_threads());
+  const int64_t threads = std::max<int64_t>(1, compute_threads());
   return {std::max<int64_t>(1, std::min(threads, (rows + kGrain - 1) / kGrain)), rows};
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "engine/core/error.h"
+#include "engine/core/parallel.h"
 #include "engine/model/conv_implementation.h"
 #include "engine/model/fused_kernels.h"
 
@@ -61,7 +62,7 @@ void aggregate_rows_baseline(const AggregateArgs<T>& a, T* out, int64_t begin, i
 
 template <typename T, int kJ>
 DYNSCOPE_ISA_CLONES void aggregate_rows_simd(const AggregateArgs<T>& a, T* out, int64_t begin,
-                                              int64_t end, Width<kJ> width, T* acc) {
+                                             int64_t end, Width<kJ> width, T* acc) {
   aggregate_rows_body(a, out, begin, end, width, acc);
 }
 
@@ -70,7 +71,7 @@ void aggregate_forward(const T* features, const T* edge, const T* h, const int64
                        int64_t m, int64_t k, int64_t c, int64_t p, Width<kJ> width) {
   const AggregateArgs<T> args{features, edge, h, index, k, c, p};
   const bool simd = use_simd_clones();
-  at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
     std::vector<T> acc(static_cast<size_t>((c + p) * width()));
     if (simd) {
       aggregate_rows_simd(args, out, begin, end, width, acc.data());
@@ -145,8 +146,8 @@ void aggregate_grad_rows_baseline(const AggregateArgs<T>& a, const AggregateGrad
 
 template <typename T, int kJ>
 DYNSCOPE_ISA_CLONES void aggregate_grad_rows_simd(const AggregateArgs<T>& a,
-                                                   const AggregateGrads<T>& d, int64_t begin,
-                                                   int64_t end, Width<kJ> width, T* gt, T* dx) {
+                                                  const AggregateGrads<T>& d, int64_t begin,
+                                                  int64_t end, Width<kJ> width, T* gt, T* dx) {
   aggregate_grad_rows_body(a, d, begin, end, width, gt, dx);
 }
 
@@ -159,7 +160,7 @@ void aggregate_backward(const T* features, const T* edge, const T* h, const int6
   const int64_t ct = c + p, j = width();
   const AggregateArgs<T> args{features, edge, h, index, k, c, p};
   const bool simd = use_simd_clones();
-  at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
+  parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
     std::vector<T> gt(static_cast<size_t>(ct * j)), dx(static_cast<size_t>(ct));
     for (int64_t w = first; w < last; ++w) {
       const AggregateGrads<T> d{grad, d_buffers ? d_buffers + w * n_src * c : nullptr, d_edge, d_h};
@@ -258,8 +259,8 @@ void gather_add_rows_baseline(const T* q, const T* s, const T* r, const int64_t*
 
 template <typename T>
 DYNSCOPE_ISA_CLONES void gather_add_rows_simd(const T* q, const T* s, const T* r,
-                                               const int64_t* index, T* out, int64_t begin,
-                                               int64_t end, int64_t k, int64_t hdim) {
+                                              const int64_t* index, T* out, int64_t begin,
+                                              int64_t end, int64_t k, int64_t hdim) {
   gather_add_rows_body(q, s, r, index, out, begin, end, k, hdim);
 }
 
@@ -267,7 +268,7 @@ template <typename T>
 void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index, T* out, int64_t m,
                         int64_t k, int64_t hdim) {
   const bool simd = use_simd_clones();
-  at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
     if (simd) {
       gather_add_rows_simd(q, s, r, index, out, begin, end, k, hdim);
     } else {
@@ -279,7 +280,7 @@ void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index
 template <typename T>
 void gather_add_backward(const T* grad, const int64_t* index, T* d_q, T* d_buffers, T* d_r,
                          int64_t n_src, int64_t m, int64_t k, int64_t hdim, const Partition& part) {
-  at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
+  parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
     for (int64_t w = first; w < last; ++w) {
       T* d_s = d_buffers ? d_buffers + w * n_src * hdim : nullptr;
       for (int64_t row = part.begin(w); row < part.end(w); ++row) {
@@ -374,8 +375,8 @@ DYNSCOPE_KERNEL_BODY void layer_norm_relu_body(const float* __restrict x, const 
 }
 
 DYNSCOPE_ISA_CLONES void layer_norm_relu_simd(const float* x, const float* w, const float* b,
-                                               float* y, int64_t c, float eps, int64_t begin,
-                                               int64_t end) {
+                                              float* y, int64_t c, float eps, int64_t begin,
+                                              int64_t end) {
   layer_norm_relu_body(x, w, b, y, c, eps, begin, end);
 }
 
@@ -423,7 +424,7 @@ torch::Tensor layer_norm_relu(const torch::Tensor& x, const torch::Tensor& weigh
   float* yp = y.data_ptr<float>();
   const bool simd = use_simd_clones();
   const auto e = static_cast<float>(eps);
-  at::parallel_for(0, x.size(0), 4 * kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(x.size(0), 4 * kGrain, x.size(0) > 4 * kGrain, [&](int64_t begin, int64_t end) {
     if (simd) {
       layer_norm_relu_simd(xp, wp, bp, yp, c, e, begin, end);
     } else {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/core/error.h"
+#include "engine/core/parallel.h"
 
 namespace dynscope {
 
@@ -168,7 +169,7 @@ NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
   const uint8_t* in_mask = list.mask.data();
   const int64_t n_src = source.rows();
   std::atomic<bool> out_of_range{false};
-  at::parallel_for(0, m, 256, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, 256, m > 256, [&](int64_t begin, int64_t end) {
     for (int64_t r = begin; r < end; ++r) {
       int64_t valid = 0;
       for (int64_t j = 0; j < k; ++j) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/core/error.h"
+#include "engine/core/parallel.h"
 #include "engine/model/fused_kernels.h"
 #include "engine/model/fused_point_conv.h"
 #include "engine/model/lanes.h"
@@ -850,7 +851,7 @@ torch::Tensor run_inference_rows(const InferenceArgs& a, int64_t m, int64_t j,
   const bool simd = use_simd_clones();
   const int64_t scratch = inference_scratch(ct, j, a.hidden, a.p, a.pos_hidden, a.k);
   with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
-    at::parallel_for(0, m, kGrain, [&](int64_t begin, int64_t end) {
+    parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
       std::vector<float> buffer(static_cast<size_t>(scratch));
       if (simd) {
         inference_rows_simd(a, o, begin, end, dims, buffer.data());
@@ -895,7 +896,7 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     const int64_t ct = a.c + a.p;
     const int64_t scratch = mlp_grad_scratch(ct, j, a.hidden, a.p, a.pos_hidden, k);
     with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
-      at::parallel_for(0, part.parts, 1, [&](int64_t first, int64_t last) {
+      parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
         std::vector<float> buffer(static_cast<size_t>(scratch));
         std::vector<int64_t> edges(static_cast<size_t>(k));
         for (int64_t wk = first; wk < last; ++wk) {

@@ -1,5 +1,5 @@
 // parallel_chunks, on_compute_threads and TaskErrors: every chunk once, work really shared by the
-// region's threads, errors carried out of tasks and regions.
+// region's threads, the work on the calling thread, errors carried out of tasks and regions.
 #include "engine/core/parallel.h"
 
 #include <gtest/gtest.h>
@@ -103,6 +103,27 @@ TEST_F(ParallelTest, TaskRunsBesideTheWorkThatStartedIt) {
   });
   EXPECT_TRUE(work_saw_task);
   EXPECT_TRUE(task_saw_work);
+}
+
+// `work` runs on the thread that called on_compute_threads, so what that thread holds in
+// thread-local state (LibTorch's grad mode, for one) holds inside: the other threads of the
+// region only take tasks. Many regions, so that any other thread would have had its chance.
+TEST_F(ParallelTest, WorkRunsOnTheCallingThread) {
+  thread_local int mark = 0;
+  mark = 7;
+  for (const int threads : {1, 2, 3}) {
+    set_compute_threads(threads);
+    for (int i = 0; i < 50; ++i) {
+      std::thread::id inside;
+      int seen = 0;
+      on_compute_threads([&] {
+        inside = std::this_thread::get_id();
+        seen = mark;
+      });
+      ASSERT_EQ(inside, std::this_thread::get_id()) << threads << " threads, region " << i;
+      ASSERT_EQ(seen, 7);
+    }
+  }
 }
 
 TEST_F(ParallelTest, WorkErrorIsRethrownAfterTheRegion) {

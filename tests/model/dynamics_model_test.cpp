@@ -9,6 +9,8 @@
 #include <torch/utils.h>
 
 #include "engine/core/error.h"
+#include "engine/core/threads.h"
+#include "engine/model/torch_runtime.h"
 #include "tests/model/model_test_util.h"
 
 namespace dynscope {
@@ -123,6 +125,37 @@ TEST(DynamicsModelTest, ObjectWithFewerThanKPointsWorks) {
   EXPECT_EQ(p.rows(), 102);
 }
 
+// A step's prediction does not depend on the compute threads: on more than one the hierarchy,
+// the input and the pass share one region, the kernels' rows as tasks. Boxes 0.05 apart, so the
+// relational lists hold rows with and without neighbours (compacted at level 0); the model's own
+// kernel sizes (the Physion preset, C = 16) and the generic ones (tiny_config).
+TEST(DynamicsModelTest, PredictionsDoNotDependOnTheThreadCount) {
+  const int saved = compute_threads();
+  const auto scene = make_scene(4, 300, 21);
+  const PointState st = make_state(scene, 3);
+  ModelConfig physion = ModelConfig::preset("physion");
+  physion.width = 16;
+  physion.levels = 3;
+  physion.bottleneck_blocks = 1;
+  for (const ModelConfig& config :
+       {tiny_config(ModelKind::kPointConv), tiny_config(ModelKind::kGnn),
+        tiny_config(ModelKind::kFlat), physion}) {
+    torch::manual_seed(3);
+    DynamicsModel model(config);
+    model->set_stats(some_stats());
+    model->eval();
+    set_torch_threads(1);
+    const Points one = model->predict_next(st);
+    for (int threads : {2, 3}) {
+      set_torch_threads(threads);
+      const Points many = model->predict_next(st);
+      EXPECT_LT((many - one).cwiseAbs().maxCoeff(), 1e-9)
+          << to_string(config.kind) << " C = " << config.width << ", " << threads << " threads";
+    }
+  }
+  set_torch_threads(saved);
+}
+
 TEST(DynamicsModelTest, RejectsMismatchedState) {
   const auto scene = make_scene(2, 20, 9);
   DynamicsModel model(tiny_config());
@@ -132,6 +165,11 @@ TEST(DynamicsModelTest, RejectsMismatchedState) {
   PointState wrong_mask = make_state(scene, 1);
   wrong_mask.static_points.assign(39, 0);
   EXPECT_THROW(model->predict_next(wrong_mask), ValueError);
+  // Found inside the step's region of two threads, the error still reaches the caller.
+  const int saved = compute_threads();
+  set_torch_threads(2);
+  EXPECT_THROW(model->predict_next(wrong_mask), ValueError);
+  set_torch_threads(saved);
 }
 
 // hold_static: the state's static points keep p(t) exactly, every other point gets the
