@@ -80,7 +80,8 @@ torch::Tensor ConvUnitImpl::forward(const torch::Tensor& x, const torch::Tensor&
   if (!resample && query.size(0) != source.size(0)) {
     throw ValueError("conv_unit", "a non-resampling unit needs the query points to be the source");
   }
-  if (!resample && neighbors.active_list && !neighbors.gate.defined()) {
+  if (!resample && neighbors.active_list && !neighbors.gate.defined() &&
+      (neighbors.rows() - neighbors.active.size(0)) * x.size(1) >= kMinIdleWork) {
     return forward_active(x, query, neighbors);
   }
   const torch::Tensor r = reduce_input(x);

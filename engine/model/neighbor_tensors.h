@@ -47,10 +47,9 @@ struct NeighborTensors {
                          double scale) const;
   /// Computes rel, count and has_any from the list's `query` `[M,3]` and `source` `[N,3]` points.
   void prepare(const torch::Tensor& query, const torch::Tensor& source);
-  /// Fewer rows without neighbours than this, and compact() leaves a list dense: the dense
-  /// convolutions then cost less than the few more ops of the compacted ones (measured on the
-  /// bundled Physion-like rollouts).
-  static constexpr int64_t kMinIdleRows = 256;
+  /// Fewer rows without neighbours than this, and compact() leaves a list dense: no unit of any
+  /// width would use it (ConvUnit::kMinIdleWork).
+  static constexpr int64_t kMinIdleRows = 16;
   /// For a prepared list whose queries are its sources: fills `active` and `active_list` when at
   /// least `min_idle_rows` (≥ 1) rows have no valid neighbour and every source a row reads is
   /// itself a row with neighbours, as in a relational list (being within the radius of another

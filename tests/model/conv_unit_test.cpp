@@ -8,6 +8,7 @@
 #include <torch/utils.h>
 
 #include <algorithm>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -88,39 +89,55 @@ NeighborTensors relational_case(int64_t n, double radius, int64_t k, uint64_t se
 
 // The compacted path (the active rows alone, relu(x + e) for the others) against the dense one,
 // for PointConv and GNN units with and without LayerNorm: outputs and the gradients of the
-// input and of every parameter; lists with no row active and with every row active.
+// input and of every parameter; lists with no row active and with every row active. 300 rows of
+// 64 channels leave enough rows without neighbours for the unit to take the compacted list
+// (ConvUnit::kMinIdleWork); that it does is shown by spoiling the compacted list's positions.
 TEST(ConvUnitTest, ACompactedRelationalListGivesTheDenseOutputAndGradients) {
-  for (double radius : {0.15, 0.0, 5.0}) {
+  const int64_t n = 300, channels = 64;
+  for (double radius : {0.08, 0.0, 5.0}) {
     torch::Tensor points;
-    const NeighborTensors dense = relational_case(60, radius, 5, 3, &points);
+    const NeighborTensors dense = relational_case(n, radius, 5, 3, &points);
     NeighborTensors compacted = dense;
     compacted.compact(1);
     const int64_t active = (dense.count > 0).sum().item<int64_t>();
     if (radius == 5.0) {  // every row has neighbours: nothing to compact
-      EXPECT_EQ(active, 60);
+      EXPECT_EQ(active, n);
       EXPECT_FALSE(compacted.active_list);
       continue;
     }
     ASSERT_TRUE(compacted.active_list) << "radius " << radius;
     EXPECT_EQ(compacted.active.size(0), active);
     if (radius > 0) {
-      EXPECT_GT(active, 5);
-      EXPECT_LT(active, 50);
+      EXPECT_GT(active, 20);
+      EXPECT_GE((n - active) * channels, ConvUnitImpl::kMinIdleWork);
     }
     for (ConvKind kind : {ConvKind::kPointConv, ConvKind::kGnn}) {
       for (bool norm : {true, false}) {
         torch::manual_seed(7);
-        ConvUnit unit(ConvUnitOptions(8, 8)
+        ConvUnit unit(ConvUnitOptions(channels, channels)
                           .conv(kind)
                           .c_mid(4)
                           .normalize(true)
                           .layer_norm(norm)
-                          .position_scale(0.15));
-        const torch::Tensor x = torch::randn({60, 8}).requires_grad_(true);
+                          .position_scale(0.08));
+        const torch::Tensor x = torch::randn({n, channels}).requires_grad_(true);
         const torch::Tensor ref = unit->forward(x, points, points, dense, false);
         const torch::Tensor got = unit->forward(x, points, points, compacted, false);
         ASSERT_EQ(got.sizes(), ref.sizes());
         EXPECT_TRUE(torch::allclose(got, ref, 1e-5, 1e-6)) << (got - ref).abs().max();
+        if (active > 0) {
+          NeighborTensors spoiled = compacted;
+          auto list = std::make_shared<NeighborTensors>(*compacted.active_list);
+          list->rel = torch::ones_like(list->rel);
+          spoiled.active_list = list;
+          const torch::Tensor read = unit->forward(x, points, points, spoiled, false);
+          EXPECT_FALSE(torch::allclose(read, ref, 1e-3, 1e-3)) << "the compacted list was not read";
+          // Eight channels: too few rows without neighbours to pay; the unit stays dense.
+          ConvUnit narrow(ConvUnitOptions(8, 8).conv(kind).c_mid(4).normalize(true));
+          const torch::Tensor x8 = torch::randn({n, 8});
+          EXPECT_TRUE(torch::equal(narrow->forward(x8, points, points, spoiled, false),
+                                   narrow->forward(x8, points, points, dense, false)));
+        }
         std::vector<torch::Tensor> wrt = unit->parameters();
         wrt.push_back(x);
         const torch::Tensor w = torch::randn_like(ref);

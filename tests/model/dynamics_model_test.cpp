@@ -127,8 +127,8 @@ TEST(DynamicsModelTest, ObjectWithFewerThanKPointsWorks) {
 
 // A step's prediction does not depend on the compute threads: on more than one the hierarchy,
 // the input and the pass share one region, the kernels' rows as tasks. Boxes 0.05 apart, so the
-// relational lists hold rows with and without neighbours (compacted at level 0); the model's own
-// kernel sizes (the Physion preset, C = 16) and the generic ones (tiny_config).
+// relational lists hold rows with and without neighbours; the model's own kernel sizes (the
+// Physion preset, C = 16) and the generic ones (tiny_config).
 TEST(DynamicsModelTest, PredictionsDoNotDependOnTheThreadCount) {
   const int saved = compute_threads();
   const auto scene = make_scene(4, 300, 21);
