@@ -216,7 +216,8 @@ Hierarchy DynamicsModelImpl::build_hierarchy(const PointState& state, HierarchyC
 
 Points DynamicsModelImpl::predict_next(const PointState& state, HierarchyCache* cache) {
   state.validate();
-  torch::NoGradGuard no_grad;
+  // No autograd bookkeeping on any op of the step (no tensor of it leaves the function).
+  c10::InferenceMode inference;
   const torch::Device device = velocity_mean_.device();
   torch::Tensor delta;
   on_compute_threads([&] {  // the hierarchy, the input and the pass in one region (predict_delta)
