@@ -168,20 +168,29 @@ NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
   const int32_t* in_index = list.index.data();
   const uint8_t* in_mask = list.mask.data();
   const int64_t n_src = source.rows();
+  const double* src = source.data();  // [N,3] row-major
+  static constexpr double kZeros[3] = {0.0, 0.0, 0.0};
+  const double* first = n_src > 0 ? src : kZeros;
   std::atomic<bool> out_of_range{false};
   parallel_chunks(m, 256, m > 256, [&](int64_t begin, int64_t end) {
+    bool bad = false;
     for (int64_t r = begin; r < end; ++r) {
       int64_t valid = 0;
+      const double qx = query(r, 0), qy = query(r, 1), qz = query(r, 2);
       for (int64_t j = 0; j < k; ++j) {
         const int64_t e = r * k + j;
         const int64_t s = in_index[e];
         const bool ok = in_mask[e] != 0 && s >= 0 && s < n_src;
-        if (in_mask[e] != 0 && !ok) out_of_range = true;
+        bad |= in_mask[e] != 0 && !ok;
+        // Without branches: a masked entry reads the first source row (or zeros) and writes 0.
+        const double* p = ok ? src + 3 * s : first;
+        const auto dx = static_cast<float>(p[0] - qx), dy = static_cast<float>(p[1] - qy),
+                   dz = static_cast<float>(p[2] - qz);
         mask[e] = ok;
         index[e] = ok ? s : -1;
-        for (int a = 0; a < 3; ++a) {
-          rel[3 * e + a] = ok ? static_cast<float>(source(s, a) - query(r, a)) : 0.0f;
-        }
+        rel[3 * e] = ok ? dx : 0.0f;
+        rel[3 * e + 1] = ok ? dy : 0.0f;
+        rel[3 * e + 2] = ok ? dz : 0.0f;
         valid += ok ? 1 : 0;
       }
       const float c = static_cast<float>(valid), has = valid > 0 ? 1.0f : 0.0f;
@@ -189,6 +198,7 @@ NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
       has_any[r] = has;
       inv_count[r] = has / std::max(c, 1.0f);
     }
+    if (bad) out_of_range = true;
   });
   if (out_of_range) {
     throw ValueError("neighbor_list", "a valid entry indexes outside the " + std::to_string(n_src) +
