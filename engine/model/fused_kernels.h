@@ -3,7 +3,6 @@
 // the instruction-set cloning of kernel entry points. Not part of the engine's interface.
 #pragma once
 
-#include <ATen/Parallel.h>
 #include <torch/autograd.h>
 #include <torch/types.h>
 

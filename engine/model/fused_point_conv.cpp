@@ -3,7 +3,6 @@
 #include "engine/model/fused_point_conv.h"
 
 #include <ATen/Dispatch.h>
-#include <ATen/Parallel.h>
 #include <torch/autograd.h>
 
 #include <atomic>
@@ -71,7 +70,7 @@ void aggregate_forward(const T* features, const T* edge, const T* h, const int64
                        int64_t m, int64_t k, int64_t c, int64_t p, Width<kJ> width) {
   const AggregateArgs<T> args{features, edge, h, index, k, c, p};
   const bool simd = use_simd_clones();
-  parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, kGrain, true, [&](int64_t begin, int64_t end) {
     std::vector<T> acc(static_cast<size_t>((c + p) * width()));
     if (simd) {
       aggregate_rows_simd(args, out, begin, end, width, acc.data());
@@ -160,7 +159,7 @@ void aggregate_backward(const T* features, const T* edge, const T* h, const int6
   const int64_t ct = c + p, j = width();
   const AggregateArgs<T> args{features, edge, h, index, k, c, p};
   const bool simd = use_simd_clones();
-  parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
+  parallel_chunks(part.parts, 1, true, [&](int64_t first, int64_t last) {
     std::vector<T> gt(static_cast<size_t>(ct * j)), dx(static_cast<size_t>(ct));
     for (int64_t w = first; w < last; ++w) {
       const AggregateGrads<T> d{grad, d_buffers ? d_buffers + w * n_src * c : nullptr, d_edge, d_h};
@@ -268,7 +267,7 @@ template <typename T>
 void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index, T* out, int64_t m,
                         int64_t k, int64_t hdim) {
   const bool simd = use_simd_clones();
-  parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, kGrain, true, [&](int64_t begin, int64_t end) {
     if (simd) {
       gather_add_rows_simd(q, s, r, index, out, begin, end, k, hdim);
     } else {
@@ -280,7 +279,7 @@ void gather_add_forward(const T* q, const T* s, const T* r, const int64_t* index
 template <typename T>
 void gather_add_backward(const T* grad, const int64_t* index, T* d_q, T* d_buffers, T* d_r,
                          int64_t n_src, int64_t m, int64_t k, int64_t hdim, const Partition& part) {
-  parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
+  parallel_chunks(part.parts, 1, true, [&](int64_t first, int64_t last) {
     for (int64_t w = first; w < last; ++w) {
       T* d_s = d_buffers ? d_buffers + w * n_src * hdim : nullptr;
       for (int64_t row = part.begin(w); row < part.end(w); ++row) {
@@ -424,7 +423,7 @@ torch::Tensor layer_norm_relu(const torch::Tensor& x, const torch::Tensor& weigh
   float* yp = y.data_ptr<float>();
   const bool simd = use_simd_clones();
   const auto e = static_cast<float>(eps);
-  parallel_chunks(x.size(0), 4 * kGrain, x.size(0) > 4 * kGrain, [&](int64_t begin, int64_t end) {
+  parallel_chunks(x.size(0), 4 * kGrain, true, [&](int64_t begin, int64_t end) {
     if (simd) {
       layer_norm_relu_simd(xp, wp, bp, yp, c, e, begin, end);
     } else {

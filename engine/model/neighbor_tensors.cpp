@@ -1,8 +1,6 @@
 // Conversion of neighbour lists and hierarchies to tensors; neighbour gathers.
 #include "engine/model/neighbor_tensors.h"
 
-#include <ATen/Parallel.h>
-
 #include <algorithm>
 #include <atomic>
 #include <string>
@@ -172,7 +170,7 @@ NeighborTensors prepared_tensors(const NeighborList& list, const Points& query,
   static constexpr double kZeros[3] = {0.0, 0.0, 0.0};
   const double* first = n_src > 0 ? src : kZeros;
   std::atomic<bool> out_of_range{false};
-  parallel_chunks(m, 256, m > 256, [&](int64_t begin, int64_t end) {
+  parallel_chunks(m, 256, true, [&](int64_t begin, int64_t end) {
     bool bad = false;
     for (int64_t r = begin; r < end; ++r) {
       int64_t valid = 0;

@@ -1,6 +1,5 @@
 // The PointConv aggregation with its WeightNet and positional embedding evaluated per neighbour
 // inside the op, forward and backward (point_conv_aggregate_mlp): no [M,K,·] intermediate.
-#include <ATen/Parallel.h>
 #include <torch/autograd.h>
 
 #include <algorithm>
@@ -851,7 +850,7 @@ torch::Tensor run_inference_rows(const InferenceArgs& a, int64_t m, int64_t j,
   const bool simd = use_simd_clones();
   const int64_t scratch = inference_scratch(ct, j, a.hidden, a.p, a.pos_hidden, a.k);
   with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
-    parallel_chunks(m, kGrain, m > kGrain, [&](int64_t begin, int64_t end) {
+    parallel_chunks(m, kGrain, true, [&](int64_t begin, int64_t end) {
       std::vector<float> buffer(static_cast<size_t>(scratch));
       if (simd) {
         inference_rows_simd(a, o, begin, end, dims, buffer.data());
@@ -896,7 +895,7 @@ struct MlpAggregateFunction : torch::autograd::Function<MlpAggregateFunction> {
     const int64_t ct = a.c + a.p;
     const int64_t scratch = mlp_grad_scratch(ct, j, a.hidden, a.p, a.pos_hidden, k);
     with_mlp_dims(j, a.hidden, a.p, a.pos_hidden, [&](auto dims) {
-      parallel_chunks(part.parts, 1, part.parts > 1, [&](int64_t first, int64_t last) {
+      parallel_chunks(part.parts, 1, true, [&](int64_t first, int64_t last) {
         std::vector<float> buffer(static_cast<size_t>(scratch));
         std::vector<int64_t> edges(static_cast<size_t>(k));
         for (int64_t wk = first; wk < last; ++wk) {
