@@ -2,7 +2,8 @@
 // pose fitting, for 1k, 3k and 10k points and each model kind (pointconv, gnn, flat), each on the
 // fused ops (kernels cloned per instruction set), on the same ops with their baseline SSE2 kernels
 // and on the unfused reference formulation in the same run; training steps of the default movi-a
-// recipe model on a bundled scene; peak memory of training on 10k points.
+// recipe model on a bundled scene; peak memory of training on 10k points; the rate of the object
+// convolutions' fused op against the BLAS's at the same sizes.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/torch.h>
@@ -20,6 +21,7 @@
 #include "engine/model/checkpoint.h"
 #include "engine/model/conv_implementation.h"
 #include "engine/model/dynamics_model.h"
+#include "engine/model/fused_point_conv.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
 #include "engine/model/torch_runtime.h"
@@ -185,6 +187,87 @@ void BM_Network(benchmark::State& state) {
   set_conv_implementation(ConvImplementation::kFused);
 }
 BENCHMARK(BM_Network)->Apply(apply_impl_args);
+
+// The rate of the object convolutions' fused aggregation with its linear
+// (point_conv_aggregate_mlp_linear, as inference runs it) at the sizes of one level of the rollout
+// step at the sampling density (BM_RolloutStepRigidSteps with density 1: 3000, ~1290, ~620 and
+// ~280 points, input widths 8, 16, 32 and 64, each with the 8-wide embedding; K = 16, J = 16,
+// WeightNet hidden width 8), every neighbour valid, in GFLOP/s counted from those sizes: per
+// neighbour the WeightNet (3·8 + 8·8 + 8·16 multiply-adds), the embedding (3·8 + 8·8) and its
+// share of the aggregate (16·(C + 8)); per query the linear (C_out·16·(C + 8)). Beside it in the
+// same run, BM_SgemmRate: LibTorch's matrix product at the same linear's sizes and at 1024³, the
+// BLAS's rate on this machine.
+struct AggregationSize {
+  int64_t m, c, c_out;
+};
+constexpr AggregationSize kAggregationSizes[] = {
+    {3000, 8, 8}, {1290, 16, 16}, {620, 32, 32}, {280, 64, 64}};
+constexpr int64_t kAggK = 16, kAggJ = 16, kAggH = 8, kAggP = 8;
+
+void BM_ObjectAggregationRate(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const AggregationSize size = kAggregationSizes[state.range(0)];
+  torch::manual_seed(1);
+  const auto f = torch::TensorOptions().dtype(torch::kFloat32);
+  const int64_t sources = size.m;
+  const torch::Tensor features = torch::randn({sources, size.c}, f);
+  const torch::Tensor rel = torch::randn({size.m, kAggK, 3}, f);
+  const torch::Tensor index =
+      torch::randint(sources, {size.m, kAggK}, torch::TensorOptions().dtype(torch::kInt64));
+  EdgeMlps mlps;
+  mlps.w1 = torch::randn({kAggH, 3}, f);
+  mlps.b1 = torch::randn({kAggH}, f);
+  mlps.w2 = torch::randn({kAggH, kAggH}, f);
+  mlps.b2 = torch::randn({kAggH}, f);
+  mlps.w3 = torch::randn({kAggJ, kAggH}, f);
+  mlps.b3 = torch::randn({kAggJ}, f);
+  mlps.e1 = torch::randn({kAggP, 3}, f);
+  mlps.c1 = torch::randn({kAggP}, f);
+  mlps.e2 = torch::randn({kAggP, kAggP}, f);
+  mlps.c2 = torch::randn({kAggP}, f);
+  const int64_t ct = size.c + kAggP;
+  const torch::Tensor weight = torch::randn({size.c_out, kAggJ * ct}, f);
+  torch::NoGradGuard no_grad;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        point_conv_aggregate_mlp_linear(features, rel, mlps, torch::Tensor(), index, weight));
+  }
+  const double per_edge =
+      3 * kAggH + kAggH * kAggH + kAggH * kAggJ + 3 * kAggP + kAggP * kAggP + kAggJ * ct;
+  const double per_query = static_cast<double>(size.c_out * kAggJ * ct);
+  const double flops = 2.0 * static_cast<double>(size.m) * (kAggK * per_edge + per_query);
+  state.counters["GFLOPS"] = benchmark::Counter(
+      1e-9 * flops * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.SetLabel("M=" + std::to_string(size.m) + " C=" + std::to_string(size.c));
+}
+BENCHMARK(BM_ObjectAggregationRate)
+    ->DenseRange(0, 3)
+    ->ArgName("level")
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+// LibTorch's matrix product [M, J·(C + 8)] × [J·(C + 8), C_out] at the sizes of
+// BM_ObjectAggregationRate's levels (0-3), and 1024 × 1024 × 1024 (4).
+void BM_SgemmRate(benchmark::State& state) {
+  set_torch_threads(bench_threads());
+  const bool square = state.range(0) == 4;
+  const AggregationSize size = kAggregationSizes[square ? 0 : state.range(0)];
+  const int64_t m = square ? 1024 : size.m, k = square ? 1024 : kAggJ * (size.c + kAggP),
+                n = square ? 1024 : size.c_out;
+  torch::manual_seed(1);
+  const torch::Tensor a = torch::randn({m, k}), b = torch::randn({k, n});
+  torch::NoGradGuard no_grad;
+  for (auto _ : state) benchmark::DoNotOptimize(torch::mm(a, b));
+  state.counters["GFLOPS"] = benchmark::Counter(
+      2e-9 * static_cast<double>(m * k * n) * static_cast<double>(state.iterations()),
+      benchmark::Counter::kIsRate);
+  state.SetLabel(std::to_string(m) + "x" + std::to_string(k) + "x" + std::to_string(n));
+}
+BENCHMARK(BM_SgemmRate)
+    ->DenseRange(0, 4)
+    ->ArgName("shape")
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 
 void BM_PoseFitting(benchmark::State& state) {
   const PointState s = make_bench_state(static_cast<int>(state.range(0)));
