@@ -6,7 +6,8 @@
 # evaluated once into out/campaign/NAME.SPLIT.json (again only when the checkpoint is newer); runs
 # still training are skipped. Then `dynscope compare` prints every variant's end error as mean ±
 # sd over the seeds evaluated so far, and the paired per-scene comparisons behind the paper's
-# claims, into out/campaign/compare.SPLIT.{txt,json}.
+# claims, into out/campaign/compare.SPLIT.{txt,json}; the same for the runs at the paper's size
+# (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
@@ -15,4 +16,8 @@ split=${1:-test}
 # In the order of the claims: PointConv < GNN U-Net < non-object-centric; acc < vel; faces on < off.
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign "$split" \
   "pointconv_acc gnn_acc flat_acc pointconv_vel mesh_faces_on mesh_faces_off" \
+  --data data/movi-a-3k --split "$split"
+# The paper's size, in the same order.
+evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-c32l4 "$split" \
+  "pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4" \
   --data data/movi-a-3k --split "$split"
