@@ -209,11 +209,11 @@ void BM_ObjectAggregationRate(benchmark::State& state) {
   const AggregationSize size = kAggregationSizes[state.range(0)];
   torch::manual_seed(1);
   const auto f = torch::TensorOptions().dtype(torch::kFloat32);
-  const int64_t sources = size.m;
-  const torch::Tensor features = torch::randn({sources, size.c}, f);
+  // The queries' own points are the sources, as in a same-level list.
+  const torch::Tensor features = torch::randn({size.m, size.c}, f);
   const torch::Tensor rel = torch::randn({size.m, kAggK, 3}, f);
   const torch::Tensor index =
-      torch::randint(sources, {size.m, kAggK}, torch::TensorOptions().dtype(torch::kInt64));
+      torch::randint(size.m, {size.m, kAggK}, torch::TensorOptions().dtype(torch::kInt64));
   EdgeMlps mlps;
   mlps.w1 = torch::randn({kAggH, 3}, f);
   mlps.b1 = torch::randn({kAggH}, f);
