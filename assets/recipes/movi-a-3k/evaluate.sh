@@ -19,5 +19,5 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
   --data data/movi-a-3k --split "$split"
 # The paper's size, in the same order.
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-c32l4 "$split" \
-  "pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4" \
+  "pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4 pointconv_vel_c32l4" \
   --data data/movi-a-3k --split "$split"
