@@ -33,7 +33,7 @@ struct TrainArgs {
   int64_t max_steps = 0;
   double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
   uint64_t seed = 0;
-  bool resume = false, keep_epochs = false, hold_static = false;
+  bool resume = false, keep_epochs = false, hold_static = false, relational_top_only = false;
   DistributedArgs dist;
   CLI::App* cmd = nullptr;
 };
@@ -69,6 +69,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--noise-mode")) o.noise_mode = a.noise_mode;
   if (given(a, "--keep-epochs")) o.keep_epochs = a.keep_epochs;
   if (given(a, "--hold-static")) o.model.hold_static = a.hold_static;
+  if (given(a, "--relational-top-only")) o.model.relational_top_only = a.relational_top_only;
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--pushforward")) o.pushforward_steps = a.pushforward;
   if (given(a, "--seed")) o.seed = a.seed;
@@ -255,6 +256,10 @@ void add_train_command(CLI::App& app) {
                 "Static bodies (mass 0: tables, ramps, zones) are given, not predicted: their "
                 "points stay inputs but are left out of the loss (each scene's loss is the mean "
                 "over its moving points) and held where they are in every rollout of the model");
+  cmd->add_flag("--relational-top-only", a->relational_top_only,
+                "Relational units at level 0 only, none between downsampled objects (the "
+                "paper's U-Net for meshes; mesh input always is so). With --input mesh "
+                "--faces off this is the paper's mesh model without face reasoning");
   cmd->add_option("--k", a->k, "Neighbours per conv (default 16)");
   cmd->add_option("--c-mid", a->c_mid, "WeightNet output width (default 16)");
   cmd->add_option("--voxel", a->voxel, "Level-1 voxel (default by scale)");

@@ -22,6 +22,7 @@ HierarchyOptions HierarchyOptions::from_config(const ModelConfig& config) {
   o.k_relational = config.k_relational;
   o.object_centric = config.kind != ModelKind::kFlat;
   o.point_relational = config.input == InputMode::kPoints;
+  o.relational_top_only = config.relational_top_only;
   o.interaction_threshold = config.interaction_threshold;
   o.interaction_lattice = config.interaction_lattice;
   return o;
@@ -135,7 +136,8 @@ void build_levels(const Points& points, const std::vector<int32_t>& object_ids,
     }
     indices[static_cast<size_t>(l)] = std::make_unique<LevelIndex>(options, level);
     const LevelIndex* index = indices[static_cast<size_t>(l)].get();
-    if (options.object_centric && options.point_relational) {
+    if (options.object_centric && options.point_relational &&
+        (l == 0 || !options.relational_top_only)) {
       // The task reads the level's points, ids and radius, which the chain no longer writes, and
       // writes only the level's relational list.
       HierarchyLevel* out = &level;

@@ -25,6 +25,8 @@ struct HierarchyOptions {
                                  ///< downsampling ignores object ids).
   bool point_relational = true;  ///< Build the point relational lists (false for mesh input,
                                  ///< whose relational path runs through interaction points).
+  bool relational_top_only = false;  ///< Point relational lists at level 0 only (the model has
+                                     ///< no relational units below it).
   double interaction_threshold = 0.1;  ///< Mesh input: interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: lattice samples per face edge.
 

@@ -69,6 +69,11 @@ double ModelConfig::voxel_at(int level) const {
 
 double ModelConfig::radius_at(int level) const { return radius * std::pow(growth, level); }
 
+bool ModelConfig::has_relational(int level) const {
+  if (kind == ModelKind::kFlat) return false;
+  return level == 0 || (input == InputMode::kPoints && !relational_top_only);
+}
+
 void ModelConfig::validate() const {
   auto require = [](bool ok, const char* field, const std::string& message) {
     if (!ok) throw ValueError(field, message);
@@ -116,6 +121,7 @@ std::string ModelConfig::to_json() const {
   j["interaction_threshold"] = interaction_threshold;
   j["interaction_lattice"] = interaction_lattice;
   if (hold_static) j["hold_static"] = true;
+  if (relational_top_only) j["relational_top_only"] = true;
   return j.dump();
 }
 
@@ -176,6 +182,7 @@ ModelConfig ModelConfig::from_json(const std::string& text, const std::string& s
   read_field(j, "interaction_threshold", source, c.interaction_threshold);
   read_field(j, "interaction_lattice", source, c.interaction_lattice);
   read_field(j, "hold_static", source, c.hold_static);
+  read_field(j, "relational_top_only", source, c.relational_top_only);
   try {
     c.validate();
   } catch (const ValueError& e) {

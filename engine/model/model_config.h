@@ -49,6 +49,11 @@ struct ModelConfig {
   bool layer_norm = true;      ///< LayerNorm inside every conv unit; false: no normalisation.
   double interaction_threshold = 0.1;  ///< Mesh input: face-to-face interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: samples per face edge when pairing faces.
+  /// Relational units only at level 0 (the paper's U-Net for meshes, supplement §4: no relational
+  /// reasoning between downsampled objects); mesh input always is so. false: every level of a
+  /// points model has one. With true, a points model on mesh vertices is the paper's mesh U-Net
+  /// without face reasoning (relations from the vertices within the radius).
+  bool relational_top_only = false;
   /// Static bodies (mass 0) are given, not predicted: their points are inputs like any other but
   /// stay where they are (p̂(t+1) = p(t), PointState::static_points) and training leaves them out
   /// of the loss, each scene's loss being the mean over its moving points. false: every point is
@@ -68,8 +73,12 @@ struct ModelConfig {
 
   /// Throws ValueError naming the first field out of range.
   void validate() const;
-  /// Compact JSON object with every field (hold_static only when set, so that the configurations of
-  /// models without it stay byte-identical to those written before it existed).
+  /// Whether the blocks at `level` have a relational unit (none in the flat baseline).
+  bool has_relational(int level) const;
+
+  /// Compact JSON object with every field (hold_static and relational_top_only only when set, so
+  /// that the configurations of models without them stay byte-identical to those written before
+  /// they existed).
   std::string to_json() const;
   /// Parses JSON written by to_json(); missing fields keep their defaults. Throws FormatError
   /// (`source`, field, ...) on malformed JSON, wrong types or unknown enum names, and on values

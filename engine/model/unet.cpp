@@ -14,8 +14,7 @@ InteractionBlock UNetImpl::make_block(int64_t in, int64_t out, int64_t skip, int
   return InteractionBlock(InteractionBlockOptions(in, out)
                               .kind(config_.kind)
                               .skip_channels(skip)
-                              .relational(config_.kind != ModelKind::kFlat &&
-                                          (config_.input == InputMode::kPoints || level == 0))
+                              .relational(config_.has_relational(level))
                               .mesh_relational(config_.input == InputMode::kMesh && level == 0)
                               .c_mid(config_.c_mid)
                               .pos_channels(config_.pos_channels)

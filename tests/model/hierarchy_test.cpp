@@ -211,6 +211,31 @@ TEST(HierarchyTest, FlatVariantUsesPlainKnnWithoutRelationalLists) {
   EXPECT_TRUE(crosses_objects);
 }
 
+// A model with relational units at level 0 only gets its relational list there and no other;
+// every other list is the full hierarchy's.
+TEST(HierarchyTest, RelationalTopOnlyBuildsLevelZerosRelationalListAlone) {
+  const auto scene = make_scene(3, 80, 7);
+  HierarchyOptions o = small_options();
+  const Hierarchy full = build_hierarchy(scene.points, scene.ids, o);
+  o.relational_top_only = true;
+  const Hierarchy top = build_hierarchy(scene.points, scene.ids, o);
+  ASSERT_EQ(top.num_levels(), full.num_levels());
+  EXPECT_GT(top.levels[0].relational.rows(), 0);
+  EXPECT_EQ(top.levels[0].relational.index, full.levels[0].relational.index);
+  for (int l = 0; l < top.num_levels(); ++l) {
+    const HierarchyLevel& a = top.levels[static_cast<size_t>(l)];
+    const HierarchyLevel& b = full.levels[static_cast<size_t>(l)];
+    if (l > 0) {
+      EXPECT_GT(b.relational.rows(), 0);
+      EXPECT_EQ(a.relational.rows(), 0) << "level " << l;
+    }
+    EXPECT_EQ(a.points, b.points);
+    EXPECT_EQ(a.same.index, b.same.index);
+    EXPECT_EQ(a.down.index, b.down.index);
+    EXPECT_EQ(a.up.index, b.up.index);
+  }
+}
+
 TEST(HierarchyTest, RejectsBadInput) {
   const auto scene = make_scene(1, 10, 5);
   std::vector<int32_t> short_ids(scene.ids.begin(), scene.ids.end() - 1);

@@ -45,6 +45,29 @@ TEST(ModelConfigTest, HoldStaticRoundTripsAndIsOmittedWhenOff) {
   EXPECT_THROW(ModelConfig::from_json(R"({"hold_static": "yes"})"), FormatError);
 }
 
+// relational_top_only round-trips, is omitted when off, and decides with the input and the kind
+// which levels relate objects.
+TEST(ModelConfigTest, RelationalTopOnlyRoundTripsAndPicksTheLevels) {
+  ModelConfig c = ModelConfig::preset("kubric");
+  EXPECT_EQ(c.to_json().find("relational_top_only"), std::string::npos);
+  EXPECT_TRUE(c.has_relational(0));
+  EXPECT_TRUE(c.has_relational(3));
+  c.relational_top_only = true;
+  const ModelConfig d = ModelConfig::from_json(c.to_json());
+  EXPECT_TRUE(d.relational_top_only);
+  EXPECT_EQ(d.to_json(), c.to_json());
+  EXPECT_TRUE(d.has_relational(0));
+  EXPECT_FALSE(d.has_relational(1));
+  ModelConfig mesh = ModelConfig::preset("kubric");
+  mesh.input = InputMode::kMesh;
+  EXPECT_TRUE(mesh.has_relational(0));
+  EXPECT_FALSE(mesh.has_relational(2));
+  ModelConfig flat = ModelConfig::preset("kubric");
+  flat.kind = ModelKind::kFlat;
+  EXPECT_FALSE(flat.has_relational(0));
+  EXPECT_THROW(ModelConfig::from_json(R"({"relational_top_only": 1})"), FormatError);
+}
+
 TEST(ModelConfigTest, PaperScalesGrowByOnePointFive) {
   const ModelConfig p = ModelConfig::preset("physion");
   EXPECT_DOUBLE_EQ(p.voxel_at(0), 0.0);

@@ -99,6 +99,33 @@ TEST(UNetTest, CheckpointKeysAreStable) {
   EXPECT_TRUE(params.contains("head.2.bias"));
 }
 
+// The paper's U-Net for meshes relates objects at level 0 only: the blocks at coarser levels have
+// no relational unit, the rest of the network is unchanged, and every parameter still learns.
+TEST(UNetTest, RelationalTopOnlyLeavesCoarseLevelsWithoutRelationalUnits) {
+  ModelConfig c = tiny_config();
+  c.stem_blocks = 1;
+  c.relational_top_only = true;
+  const auto scene = make_scene(3, 70, 6);
+  const HierarchyTensors h = hierarchy_for(c, scene);
+  torch::manual_seed(4);
+  UNet net(c, 7, 3);
+  const auto params = net->named_parameters();
+  EXPECT_TRUE(params.contains("stem.0.relational.conv.linear.weight"));
+  EXPECT_TRUE(params.contains("decoder.1.relational.conv.linear.weight"));  // level 0
+  for (const char* block : {"encoder.0", "encoder.1", "bottleneck.0", "decoder.0"}) {
+    EXPECT_TRUE(params.contains(std::string(block) + ".object.conv.linear.weight")) << block;
+    EXPECT_FALSE(params.contains(std::string(block) + ".relational.conv.linear.weight")) << block;
+  }
+  ModelConfig all = c;
+  all.relational_top_only = false;
+  EXPECT_LT(params.size(), UNet(all, 7, 3)->named_parameters().size());
+  net->forward(torch::randn({210, 7}), h).square().sum().backward();
+  for (const auto& p : net->named_parameters()) {
+    ASSERT_TRUE(p.value().grad().defined()) << p.key();
+    EXPECT_GT(p.value().grad().abs().sum().item<double>(), 0.0) << p.key();
+  }
+}
+
 }  // namespace
 }  // namespace dynscope
 
