@@ -49,7 +49,7 @@ struct ModelConfig {
   bool layer_norm = true;      ///< LayerNorm inside every conv unit; false: no normalisation.
   double interaction_threshold = 0.1;  ///< Mesh input: face-to-face interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: samples per face edge when pairing faces.
-  /// Relational units only at level 0 (the paper's U-Net for meshes, supplement §4: no relational
+  /// Relational units only at level 0 (the paper's U-Net for meshes, its supplement: no relational
   /// reasoning between downsampled objects); mesh input always is so. false: every level of a
   /// points model has one. With true, a points model on mesh vertices is the paper's mesh U-Net
   /// without face reasoning (relations from the vertices within the radius).
