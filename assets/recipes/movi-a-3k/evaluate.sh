@@ -20,5 +20,6 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
 # The paper's size, in the same order (its faces-off runs relate objects at level 0 only, as the
 # faces-on network does).
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-c32l4 "$split" \
-  "pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4 pointconv_vel_c32l4 mesh_faces_on_c32l4 mesh_faces_off_c32l4" \
+  "pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4 pointconv_vel_c32l4
+   mesh_faces_on_c32l4 mesh_faces_off_c32l4" \
   --data data/movi-a-3k --split "$split"
