@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <utility>
 
 #include "engine/core/error.h"
 
@@ -128,9 +129,12 @@ EvalComparison compare_evaluations(const std::vector<RunEvaluations>& runs) {
     std::vector<double> ends, accuracies;
     std::vector<std::vector<double>> scenario_accuracies(n_scenarios);
     std::vector<double> scene_mean(scene_index.size(), 0.0);
+    st.floor_end_error = kNaN;
     for (const EvalSummary& s : run.seeds) {
       const ScenarioSummary& all = s.scenarios.at("all");
       ends.push_back(all.model_end_error);
+      if (std::isnan(st.floor_end_error) && !all.baseline_curve.empty())
+        st.floor_end_error = all.baseline_end_error;
       st.labelled = all.labelled;
       if (s.contact.scenarios > 0) accuracies.push_back(s.contact.model);
       for (size_t i = 0; i < n_scenarios; ++i)
@@ -196,7 +200,7 @@ std::string comparison_table(const EvalComparison& c) {
   out += line;
   for (const RunStats& r : c.runs) {
     std::string ratio =
-        std::isnan(c.floor_end_error) ? "-" : fmt("%.2fx", r.end_error_mean / c.floor_end_error);
+        std::isnan(r.floor_end_error) ? "-" : fmt("%.2fx", r.end_error_mean / r.floor_end_error);
     std::snprintf(line, sizeof line, "%-*s %5d %s %9s", w, r.label.c_str(), r.seeds,
                   right_aligned(fmt("%.4f ± %.4f", r.end_error_mean, r.end_error_sd), 18).c_str(),
                   ratio.c_str());
@@ -208,14 +212,28 @@ std::string comparison_table(const EvalComparison& c) {
     }
     out += "\n";
   }
-  if (!std::isnan(c.floor_end_error)) {
+  // One floor row per distinct floor: runs on other points (mesh vertices) have their own, and
+  // the row then names its runs.
+  std::vector<std::pair<double, std::string>> floors;
+  for (const RunStats& r : c.runs) {
+    if (std::isnan(r.floor_end_error)) continue;
+    auto same = std::find_if(floors.begin(), floors.end(),
+                             [&](const auto& f) { return f.first == r.floor_end_error; });
+    if (same == floors.end()) {
+      floors.emplace_back(r.floor_end_error, r.label);
+    } else {
+      same->second += ", " + r.label;
+    }
+  }
+  for (const auto& [floor, labels] : floors) {
     std::snprintf(line, sizeof line, "%-*s %5s %18s %9s", w, "floor", "-",
-                  fmt("%.4f", c.floor_end_error).c_str(), "1.00x");
+                  fmt("%.4f", floor).c_str(), "1.00x");
     out += line;
-    if (contact && !std::isnan(c.floor_accuracy)) {
+    if (contact && !std::isnan(c.floor_accuracy) && floor == c.floor_end_error) {
       out += "   " + fmt("%.1f %%", 100 * c.floor_accuracy);
     }
-    out += "   (constant velocity + gravity)\n";
+    out += "   (constant velocity + gravity";
+    out += floors.size() > 1 ? "; the floor of " + labels + ")\n" : ")\n";
   }
   if (contact) {
     out += "ceiling: the contact rule on the ground truth, " +
@@ -281,6 +299,7 @@ std::string comparison_to_json(const EvalComparison& c) {
                 {"seeds", r.seeds},
                 {"end_error_mean", r.end_error_mean},
                 {"end_error_sd", r.end_error_sd},
+                {"floor_end_error", num(r.floor_end_error)},
                 {"labelled", r.labelled}};
     if (r.labelled > 0) {
       run["contact_accuracy_mean"] = r.accuracy_mean;

@@ -23,6 +23,10 @@ struct RunStats {
   std::string label;
   int seeds = 0;
   double end_error_mean = 0.0, end_error_sd = 0.0;
+  /// The constant-velocity baseline's end error on this run's own points (the first of its
+  /// evaluations that has it; NaN if none): runs on other points (mesh vertices against surface
+  /// samples) have other floors.
+  double floor_end_error = 0.0;
   int labelled = 0;  ///< Scenes with a contact label (0: no contact accuracy).
   /// Contact accuracy (each evaluation's mean over its scenarios, ContactMean) over seeds.
   double accuracy_mean = 0.0, accuracy_sd = 0.0;
@@ -47,9 +51,11 @@ struct PairedDifference {
 struct EvalComparison {
   std::string split;
   int scenes = 0;
-  double floor_end_error = 0.0;  ///< The constant-velocity baseline's (NaN if none has it).
-  double floor_accuracy = 0.0;   ///< Its contact accuracy (NaN if no scene is labelled).
-  double truth_accuracy = 0.0;   ///< The threshold rule on the ground truth (NaN likewise).
+  /// The constant-velocity baseline's end error in the first evaluation that has it (NaN if none
+  /// has); each run's own is RunStats::floor_end_error.
+  double floor_end_error = 0.0;
+  double floor_accuracy = 0.0;  ///< Its contact accuracy (NaN if no scene is labelled).
+  double truth_accuracy = 0.0;  ///< The threshold rule on the ground truth (NaN likewise).
   /// The labelled scenarios when there are two or more (the Physion table shape), with the
   /// floor's and the ceiling's accuracy in each.
   std::vector<std::string> contact_scenarios;

@@ -161,6 +161,49 @@ TEST(EvalComparison, SeedMeansAndPairedDifferencesMatchAHandComputation) {
   EXPECT_TRUE(*c2.pairs[0].seed_intervals_overlap);
 }
 
+// Runs on other points (mesh vertices against surface samples) have other constant-velocity
+// floors: each run's "vs floor" is against its own, and each floor gets its row.
+TEST(EvalComparison, EachRunIsSetAgainstTheFloorOnItsOwnPoints) {
+  auto on_vertices = [](SceneEvaluation e) {
+    e.baseline_curve = {0.0, 2.0, 4.0, 6.0};
+    return e;
+  };
+  const std::string p1 = write_eval("fl_points1", {scene("s0.h5", 1.5), scene("s1.h5", 1.5)});
+  const std::string p2 = write_eval("fl_points2", {scene("s0.h5", 1.5), scene("s1.h5", 1.5)});
+  const std::string m1 =
+      write_eval("fl_mesh1", {on_vertices(scene("s0.h5", 1.5)), on_vertices(scene("s1.h5", 1.5))});
+  const std::string m2 =
+      write_eval("fl_mesh2", {on_vertices(scene("s0.h5", 3.0)), on_vertices(scene("s1.h5", 3.0))});
+  const EvalComparison c =
+      compare_evaluations({run("points", {p1, p2}), run("mesh", {m1}), run("mesh2", {m2})});
+  EXPECT_DOUBLE_EQ(c.floor_end_error, 3.0) << "the first evaluation's";
+  EXPECT_DOUBLE_EQ(c.runs[0].floor_end_error, 3.0);
+  EXPECT_DOUBLE_EQ(c.runs[1].floor_end_error, 6.0);
+  const std::string table = comparison_table(c);
+  EXPECT_NE(table.find("1.5000 ± 0.0000     0.50x"), std::string::npos) << table;
+  EXPECT_NE(table.find("1.5000 ± 0.0000     0.25x"), std::string::npos) << table;
+  EXPECT_NE(table.find("3.0000 ± 0.0000     0.50x"), std::string::npos) << table;
+  EXPECT_NE(table.find("3.0000     1.00x   (constant velocity + gravity; the floor of points)"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(
+      table.find("6.0000     1.00x   (constant velocity + gravity; the floor of mesh, mesh2)"),
+      std::string::npos)
+      << table;
+  const nlohmann::json j = nlohmann::json::parse(comparison_to_json(c));
+  EXPECT_DOUBLE_EQ(j.at("runs").at(1).at("floor_end_error").get<double>(), 6.0);
+  // One floor for every run: one row, as before, without naming the runs.
+  const std::string one = comparison_table(compare_evaluations({run("points", {p1, p2})}));
+  EXPECT_NE(one.find("3.0000     1.00x   (constant velocity + gravity)\n"), std::string::npos)
+      << one;
+  // Without the baseline (eval --no-baseline) there is no floor and no ratio.
+  std::vector<SceneEvaluation> bare = {scene("s0.h5", 1.5), scene("s1.h5", 1.5)};
+  for (SceneEvaluation& e : bare) e.baseline_curve.clear();
+  const EvalComparison none = compare_evaluations({run("bare", {write_eval("fl_bare", bare)})});
+  EXPECT_TRUE(std::isnan(none.runs[0].floor_end_error));
+  EXPECT_EQ(comparison_table(none).find("floor  "), std::string::npos) << comparison_table(none);
+}
+
 TEST(EvalComparison, SeparatedRunsAndContactAccuracy) {
   const std::string a = write_eval("ca", {scene("s0.h5", 1.0, 1, true), scene("s1.h5", 1.0, 0)});
   const std::string b = write_eval("cb", {scene("s0.h5", 2.0, 1, false), scene("s1.h5", 3.0, 0)});
