@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.h"
 #include "engine/geometry/kdtree_index.h"
@@ -109,26 +111,58 @@ InteractionPoints find_interaction_points(const Points& vertices, const Faces& f
       }
     }
   }
-  std::sort(pairs.begin(), pairs.end());
+  // The pairs in (sample a, sample b) order: bucketed by their first sample (a counting sort),
+  // then each bucket's second samples sorted, which is a full sort's order in linear time plus
+  // small sorts.
+  std::vector<size_t> start(static_cast<size_t>(total) + 1, 0);
+  for (const auto& [a, b] : pairs) ++start[static_cast<size_t>(a) + 1];
+  for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  std::vector<int32_t> second(pairs.size());
+  {
+    std::vector<size_t> next(start.begin(), start.end() - 1);
+    for (const auto& [a, b] : pairs) second[next[static_cast<size_t>(a)]++] = b;
+  }
 
   InteractionPoints out;
   out.point_a.resize(static_cast<Eigen::Index>(pairs.size()), 3);
   out.point_b.resize(static_cast<Eigen::Index>(pairs.size()), 3);
-  for (size_t p = 0; p < pairs.size(); ++p) {
-    const auto row = static_cast<Eigen::Index>(p);
-    const int32_t fa = sample_face[static_cast<size_t>(pairs[p].first)];
-    const int32_t fb = sample_face[static_cast<size_t>(pairs[p].second)];
-    out.point_a.row(row) = samples.row(pairs[p].first);
-    out.point_b.row(row) = samples.row(pairs[p].second);
-    out.face_a.push_back(fa);
-    out.face_b.push_back(fb);
-    out.object_a.push_back(face_object[static_cast<size_t>(fa)]);
-    out.object_b.push_back(face_object[static_cast<size_t>(fb)]);
-    out.face_pairs.emplace_back(fa, fb);
+  for (auto* v :
+       {&out.sample_a, &out.sample_b, &out.face_a, &out.face_b, &out.object_a, &out.object_b}) {
+    v->reserve(pairs.size());
   }
-  std::sort(out.face_pairs.begin(), out.face_pairs.end());
-  out.face_pairs.erase(std::unique(out.face_pairs.begin(), out.face_pairs.end()),
-                       out.face_pairs.end());
+  // Samples are numbered face by face, so face_a never decreases along the pairs: each face's
+  // partners are collected, sorted and made unique when the next face begins.
+  std::vector<int32_t> partners;
+  auto flush_partners = [&](int32_t fa) {
+    std::sort(partners.begin(), partners.end());
+    partners.erase(std::unique(partners.begin(), partners.end()), partners.end());
+    for (int32_t fb : partners) out.face_pairs.emplace_back(fa, fb);
+    partners.clear();
+  };
+  size_t p = 0;
+  for (Eigen::Index a = 0; a < total; ++a) {
+    const auto begin = second.begin() + static_cast<std::ptrdiff_t>(start[static_cast<size_t>(a)]);
+    const auto end =
+        second.begin() + static_cast<std::ptrdiff_t>(start[static_cast<size_t>(a) + 1]);
+    if (begin == end) continue;
+    std::sort(begin, end);
+    const int32_t fa = sample_face[static_cast<size_t>(a)];
+    if (!out.face_a.empty() && out.face_a.back() != fa) flush_partners(out.face_a.back());
+    for (auto it = begin; it != end; ++it, ++p) {
+      const auto row = static_cast<Eigen::Index>(p);
+      const int32_t fb = sample_face[static_cast<size_t>(*it)];
+      out.point_a.row(row) = samples.row(a);
+      out.point_b.row(row) = samples.row(*it);
+      out.sample_a.push_back(static_cast<int32_t>(a));
+      out.sample_b.push_back(*it);
+      out.face_a.push_back(fa);
+      out.face_b.push_back(fb);
+      out.object_a.push_back(face_object[static_cast<size_t>(fa)]);
+      out.object_b.push_back(face_object[static_cast<size_t>(fb)]);
+      partners.push_back(fb);
+    }
+  }
+  if (!out.face_a.empty()) flush_partners(out.face_a.back());
   return out;
 }
 

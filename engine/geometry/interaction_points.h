@@ -11,10 +11,13 @@ namespace dynscope {
 
 /// Close point pairs on faces of different objects. Pair p joins point_a[p] on face_a[p]
 /// (object object_a[p]) with point_b[p] on face_b[p]; each unordered pair is reported once with
-/// object_a < object_b. `face_pairs` lists the distinct (face_a, face_b) pairs.
+/// object_a < object_b. sample_a[p] and sample_b[p] number the two lattice samples (face by face,
+/// `(lattice+1)(lattice+2)/2` per face, so sample s lies on face s / that). `face_pairs` lists the
+/// distinct (face_a, face_b) pairs, ascending.
 struct InteractionPoints {
   Points point_a = Points(0, 3);
   Points point_b = Points(0, 3);
+  std::vector<int32_t> sample_a, sample_b;
   std::vector<int32_t> face_a, face_b;
   std::vector<int32_t> object_a, object_b;
   std::vector<std::pair<int32_t, int32_t>> face_pairs;

@@ -2,29 +2,35 @@
 #include "engine/model/mesh_interaction.h"
 
 #include <algorithm>
-#include <map>
+#include <cstdint>
+#include <cstring>
 #include <string>
-#include <tuple>
+#include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "engine/core/error.h"
 #include "engine/geometry/interaction_points.h"
+#include "engine/geometry/kdtree_index.h"
 
 namespace dynscope {
 
 namespace {
 
-// Fills row `row` of `list` with `candidates` sorted by distance to `query` (ties: lower index),
-// keeping at most list.k().
+// Fills row `row` of `list` with the list.k() nearest of `candidates` to `query`, nearest first
+// (ties: lower index). Only the kept ones are ordered: a selection, then a sort of those.
 void fill_row(NeighborList& list, Eigen::Index row, const Vec3& query, const Points& source,
-              std::vector<int32_t> candidates) {
-  std::vector<std::pair<double, int32_t>> d;
-  d.reserve(candidates.size());
-  for (int32_t c : candidates) d.emplace_back((source.row(c).transpose() - query).squaredNorm(), c);
-  std::sort(d.begin(), d.end());
-  const size_t n = std::min(d.size(), static_cast<size_t>(list.k()));
+              const std::vector<int32_t>& candidates,
+              std::vector<std::pair<double, int32_t>>& scratch) {
+  scratch.clear();
+  for (int32_t c : candidates)
+    scratch.emplace_back(squared_distance(source.row(c).transpose(), query), c);
+  const size_t n = std::min(scratch.size(), static_cast<size_t>(list.k()));
+  const auto kept = scratch.begin() + static_cast<std::ptrdiff_t>(n);
+  if (kept != scratch.end()) std::nth_element(scratch.begin(), kept, scratch.end());
+  std::sort(scratch.begin(), kept);
   for (size_t j = 0; j < n; ++j) {
-    list.index(row, static_cast<Eigen::Index>(j)) = d[j].second;
+    list.index(row, static_cast<Eigen::Index>(j)) = scratch[j].second;
     list.mask(row, static_cast<Eigen::Index>(j)) = 1;
   }
 }
@@ -35,6 +41,32 @@ NeighborList empty_list(Eigen::Index rows, Eigen::Index k) {
   l.mask = MaskMatrix::Zero(rows, k);
   return l;
 }
+
+// A lattice sample: its face and position (equal coordinates compare equal, so 0 and -0 hash
+// alike).
+struct Sample {
+  int32_t face;
+  double x, y, z;
+  bool operator==(const Sample& o) const {
+    return face == o.face && x == o.x && y == o.y && z == o.z;
+  }
+};
+
+struct SampleHash {
+  size_t operator()(const Sample& s) const {
+    auto bits = [](double v) {
+      uint64_t b = 0;
+      const double canonical = v == 0.0 ? 0.0 : v;
+      std::memcpy(&b, &canonical, sizeof b);
+      return b;
+    };
+    uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(s.face)) * 0x9E3779B97F4A7C15ull;
+    for (const double v : {s.x, s.y, s.z}) {
+      h ^= bits(v) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    }
+    return static_cast<size_t>(h);
+  }
+};
 
 }  // namespace
 
@@ -50,7 +82,8 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
   if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= vertices.rows())) {
     throw ValueError("faces", "index out of range [0, " + std::to_string(vertices.rows()) + ")");
   }
-  std::vector<int32_t> face_object(static_cast<size_t>(faces.rows()));
+  const auto n_faces = static_cast<size_t>(faces.rows());
+  std::vector<int32_t> face_object(n_faces);
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     face_object[static_cast<size_t>(f)] = vertex_object_ids[static_cast<size_t>(faces(f, 0))];
   }
@@ -58,64 +91,81 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
       find_interaction_points(vertices, faces, face_object, threshold, lattice);
 
   MeshInteraction out;
-  // The same lattice sample may pair with several others; it is one interaction point.
-  std::map<std::tuple<int32_t, double, double, double>, int32_t> seen;
+  // The same lattice sample may pair with several others; it is one interaction point, numbered
+  // in the order of its first pair. Samples seen before are known by their number; a new one is
+  // looked up by face and position, which also merges the coinciding samples of a degenerate face.
+  const auto per_face = static_cast<size_t>((lattice + 1) * (lattice + 2) / 2);
+  std::vector<int32_t> point_of_sample(n_faces * per_face, -1);
+  std::unordered_map<Sample, int32_t, SampleHash> seen;
   std::vector<Vec3> pts;
-  auto add = [&](int32_t face, const Eigen::RowVector3d& p) {
-    const auto key = std::make_tuple(face, p.x(), p.y(), p.z());
-    if (seen.emplace(key, static_cast<int32_t>(pts.size())).second) {
+  auto add = [&](int32_t sample, int32_t face, const Eigen::RowVector3d& p) {
+    int32_t& known = point_of_sample[static_cast<size_t>(sample)];
+    if (known >= 0) return;
+    const auto [it, inserted] =
+        seen.emplace(Sample{face, p.x(), p.y(), p.z()}, static_cast<int32_t>(pts.size()));
+    known = it->second;
+    if (inserted) {
       pts.push_back(p.transpose());
       out.face.push_back(face);
       out.object_ids.push_back(face_object[static_cast<size_t>(face)]);
     }
   };
   for (size_t p = 0; p < ip.size(); ++p) {
-    add(ip.face_a[p], ip.point_a.row(static_cast<Eigen::Index>(p)));
-    add(ip.face_b[p], ip.point_b.row(static_cast<Eigen::Index>(p)));
+    add(ip.sample_a[p], ip.face_a[p], ip.point_a.row(static_cast<Eigen::Index>(p)));
+    add(ip.sample_b[p], ip.face_b[p], ip.point_b.row(static_cast<Eigen::Index>(p)));
   }
   const auto n_ip = static_cast<Eigen::Index>(pts.size());
   out.points.resize(n_ip, 3);
   for (Eigen::Index i = 0; i < n_ip; ++i) out.points.row(i) = pts[static_cast<size_t>(i)];
 
-  std::map<int32_t, std::vector<int32_t>> on_face, paired;
+  // Per face: its interaction points (ascending) and the faces paired with it (in pair order).
+  std::vector<std::vector<int32_t>> on_face(n_faces), paired(n_faces);
   for (Eigen::Index i = 0; i < n_ip; ++i) {
-    on_face[out.face[static_cast<size_t>(i)]].push_back(static_cast<int32_t>(i));
+    on_face[static_cast<size_t>(out.face[static_cast<size_t>(i)])].push_back(
+        static_cast<int32_t>(i));
   }
   for (const auto& [fa, fb] : ip.face_pairs) {
-    paired[fa].push_back(fb);
-    paired[fb].push_back(fa);
+    paired[static_cast<size_t>(fa)].push_back(fb);
+    paired[static_cast<size_t>(fb)].push_back(fa);
   }
 
+  // Layers 1 and 2, face by face: the receivers on one face share their sender candidates.
   out.face_vertices = empty_list(n_ip, 3);
   out.senders = empty_list(n_ip, k);
-  for (Eigen::Index i = 0; i < n_ip; ++i) {
-    const int32_t f = out.face[static_cast<size_t>(i)];
-    for (int c = 0; c < 3; ++c) {
-      out.face_vertices.index(i, c) = faces(f, c);
-      out.face_vertices.mask(i, c) = 1;
-    }
-    std::vector<int32_t> candidates;
+  std::vector<int32_t> candidates;
+  std::vector<std::pair<double, int32_t>> scratch;
+  for (size_t f = 0; f < n_faces; ++f) {
+    if (on_face[f].empty()) continue;
+    candidates.clear();
     for (int32_t g : paired[f]) {
-      const auto it = on_face.find(g);
-      if (it != on_face.end())
-        candidates.insert(candidates.end(), it->second.begin(), it->second.end());
+      const auto& senders = on_face[static_cast<size_t>(g)];
+      candidates.insert(candidates.end(), senders.begin(), senders.end());
     }
-    fill_row(out.senders, i, out.points.row(i).transpose(), out.points, std::move(candidates));
+    for (int32_t i : on_face[f]) {
+      for (int c = 0; c < 3; ++c) {
+        out.face_vertices.index(i, c) = faces(static_cast<Eigen::Index>(f), c);
+        out.face_vertices.mask(i, c) = 1;
+      }
+      fill_row(out.senders, i, out.points.row(i).transpose(), out.points, candidates, scratch);
+    }
   }
 
+  // Layer 3: each vertex takes every interaction point on the faces that contain it.
   std::vector<std::vector<int32_t>> per_vertex(static_cast<size_t>(vertices.rows()));
-  for (const auto& [f, members] : on_face) {
+  for (size_t f = 0; f < n_faces; ++f) {
+    if (on_face[f].empty()) continue;
     for (int c = 0; c < 3; ++c) {
-      auto& list = per_vertex[static_cast<size_t>(faces(f, c))];
-      list.insert(list.end(), members.begin(), members.end());
+      auto& list = per_vertex[static_cast<size_t>(faces(static_cast<Eigen::Index>(f), c))];
+      list.insert(list.end(), on_face[f].begin(), on_face[f].end());
     }
   }
   size_t widest = 0;
   for (const auto& l : per_vertex) widest = std::max(widest, l.size());
   out.vertex_points = empty_list(vertices.rows(), static_cast<Eigen::Index>(widest));
   for (Eigen::Index v = 0; v < vertices.rows(); ++v) {
-    fill_row(out.vertex_points, v, vertices.row(v).transpose(), out.points,
-             std::move(per_vertex[static_cast<size_t>(v)]));
+    const auto& list = per_vertex[static_cast<size_t>(v)];
+    if (!list.empty())
+      fill_row(out.vertex_points, v, vertices.row(v).transpose(), out.points, list, scratch);
   }
   return out;
 }

@@ -3,7 +3,8 @@
 // fused ops (kernels cloned per instruction set), on the same ops with their baseline SSE2 kernels
 // and on the unfused reference formulation in the same run; training steps of the default movi-a
 // recipe model on a bundled scene; peak memory of training on 10k points; the rate of the object
-// convolutions' fused op against the BLAS's at the same sizes.
+// convolutions' fused op against the BLAS's at the same sizes; the mesh interaction lists beside
+// their previous formulation.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/torch.h>
@@ -22,6 +23,7 @@
 #include "engine/model/conv_implementation.h"
 #include "engine/model/dynamics_model.h"
 #include "engine/model/fused_point_conv.h"
+#include "engine/model/mesh_interaction.h"
 #include "engine/model/model_config.h"
 #include "engine/model/point_state.h"
 #include "engine/model/torch_runtime.h"
@@ -30,6 +32,7 @@
 #include "engine/train/adam_step.h"
 #include "engine/train/train_options.h"
 #include "tests/bench/bench_state.h"
+#include "tests/bench/legacy_mesh_interaction.h"
 
 namespace dynscope {
 namespace {
@@ -395,6 +398,62 @@ BENCHMARK(BM_PhysionRollouts)
     ->Arg(0)
     ->Arg(1)
     ->ArgName("cache")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The mesh interaction lists (interaction points and their three neighbourhoods) of the bundled
+// movi-a scenes as the campaign's faces-on recipe samples them (mesh vertices clustered at 0.3,
+// K = 12), every frame of both scenes once per iteration; arguments {implementation (0: the
+// previous formulation, tests/bench/legacy_mesh_interaction.h; 1: the library's), interaction
+// threshold in hundredths}. points_per_frame counts the interaction points.
+void BM_MeshInteraction(benchmark::State& state) {
+  const std::string root = DYNSCOPE_SOURCE_DIR;
+  SamplingOptions sampling;
+  sampling.input = InputMode::kMesh;
+  sampling.voxel = 0.3;
+  struct Frame {
+    Points vertices;
+    std::vector<int32_t> ids;
+    const Faces* faces;
+  };
+  std::vector<Scene> scenes;
+  std::vector<ModelPoints> meshes;
+  for (const char* name : {"movi-a_0000.h5", "movi-a_0001.h5"}) {
+    scenes.push_back(read_scene(root + "/assets/scenes/" + name));
+    meshes.push_back(build_model_points(scenes.back(), sampling));
+  }
+  std::vector<Frame> frames;
+  for (size_t m = 0; m < scenes.size(); ++m) {
+    for (int t = 0; t < scenes[m].num_frames(); ++t)
+      frames.push_back(
+          {meshes[m].positions(scenes[m], t), meshes[m].cloud.object_id, &meshes[m].faces});
+  }
+  const bool library = state.range(0) != 0;
+  const double threshold = 0.01 * static_cast<double>(state.range(1));
+  int64_t points = 0, built = 0;
+  for (auto _ : state) {
+    for (const Frame& f : frames) {
+      const MeshInteraction mi =
+          library ? build_mesh_interaction(f.vertices, f.ids, *f.faces, threshold, 3, 12)
+                  : legacy::build_mesh_interaction(f.vertices, f.ids, *f.faces, threshold, 3, 12);
+      points += mi.size();
+      ++built;
+      benchmark::DoNotOptimize(mi);
+    }
+  }
+  state.counters["s_per_frame"] = benchmark::Counter(
+      static_cast<double>(built), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["points_per_frame"] =
+      static_cast<double>(points) / static_cast<double>(std::max<int64_t>(1, built));
+  state.SetLabel(std::string(library ? "library" : "previous formulation") + ", " +
+                 std::to_string(frames.size()) + " frames, 1 thread");
+}
+BENCHMARK(BM_MeshInteraction)
+    ->Args({0, 40})
+    ->Args({1, 40})
+    ->Args({0, 60})
+    ->Args({1, 60})
+    ->ArgNames({"impl", "threshold_cm"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,6 +7,8 @@
 #include <set>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "engine/core/error.h"
 #include "engine/core/rng.h"
@@ -144,13 +146,20 @@ TEST(InteractionPointsTest, EqualsBruteForceOnRandomCloseMeshes) {
     const auto expected = brute_force(w, threshold, lattice);
     ASSERT_EQ(ip.size(), expected.size()) << "seed " << seed;
     ASSERT_GT(ip.size(), 0u);
+    std::vector<std::pair<int32_t, int32_t>> face_pairs;
     for (size_t p = 0; p < ip.size(); ++p) {
+      EXPECT_EQ(ip.sample_a[p], std::get<0>(expected[p])) << "pair " << p;
+      EXPECT_EQ(ip.sample_b[p], std::get<1>(expected[p])) << "pair " << p;
       EXPECT_EQ(ip.face_a[p], std::get<2>(expected[p])) << "pair " << p;
       EXPECT_EQ(ip.face_b[p], std::get<3>(expected[p])) << "pair " << p;
+      face_pairs.emplace_back(ip.face_a[p], ip.face_b[p]);
       EXPECT_EQ(ip.object_a[p], w.face_object[ip.face_a[p]]);
       EXPECT_EQ(ip.object_b[p], w.face_object[ip.face_b[p]]);
       EXPECT_LT(ip.object_a[p], ip.object_b[p]);
     }
+    std::sort(face_pairs.begin(), face_pairs.end());
+    face_pairs.erase(std::unique(face_pairs.begin(), face_pairs.end()), face_pairs.end());
+    EXPECT_EQ(ip.face_pairs, face_pairs) << "the distinct face pairs, ascending";
   }
 }
 
