@@ -42,17 +42,20 @@ void check_inputs(const Points& vertices, const Faces& faces,
 
 }  // namespace
 
-InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
-                                          const std::vector<int32_t>& face_object, double threshold,
-                                          int lattice) {
+SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
+                              const std::vector<int32_t>& face_object, double threshold,
+                              int lattice) {
   check_inputs(vertices, faces, face_object, threshold, lattice);
 
   // Barycentric lattice (i, j, lattice - i - j) / lattice, corners and edges included, numbered
   // face by face so that sample order follows face order.
   const int per_face = (lattice + 1) * (lattice + 2) / 2;
   const Eigen::Index total = faces.rows() * per_face;
-  Points samples(total, 3);
-  std::vector<int32_t> sample_face(static_cast<size_t>(total));
+  SamplePairs out;
+  Points& samples = out.samples;
+  std::vector<int32_t>& sample_face = out.sample_face;
+  samples.resize(total, 3);
+  sample_face.resize(static_cast<size_t>(total));
   Eigen::Index s = 0;
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const Eigen::RowVector3d a = vertices.row(faces(f, 0));
@@ -87,7 +90,7 @@ InteractionPoints find_interaction_points(const Points& vertices, const Faces& f
 
   // Each unordered pair is found once, from the object with the smaller id.
   const double sq_threshold = threshold * threshold;
-  std::vector<std::pair<int32_t, int32_t>> pairs;
+  std::vector<std::pair<int32_t, int32_t>>& pairs = out.pairs;
   std::vector<Neighbor> found;
   for (auto it_a = by_object.begin(); it_a != by_object.end(); ++it_a) {
     const Aabb& box_a = boxes.at(it_a->first);
@@ -111,6 +114,17 @@ InteractionPoints find_interaction_points(const Points& vertices, const Faces& f
       }
     }
   }
+  return out;
+}
+
+InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
+                                          const std::vector<int32_t>& face_object, double threshold,
+                                          int lattice) {
+  const SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice);
+  const Points& samples = found.samples;
+  const std::vector<int32_t>& sample_face = found.sample_face;
+  const std::vector<std::pair<int32_t, int32_t>>& pairs = found.pairs;
+  const Eigen::Index total = samples.rows();
   // The pairs in (sample a, sample b) order: bucketed by their first sample (a counting sort),
   // then each bucket's second samples sorted, which is a full sort's order in linear time plus
   // small sorts.

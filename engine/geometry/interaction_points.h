@@ -25,6 +25,17 @@ struct InteractionPoints {
   size_t size() const { return face_a.size(); }
 };
 
+/// The lattice samples of every face and their close pairs across objects, unordered: the search
+/// behind find_interaction_points (which validates the same inputs and orders the pairs).
+struct SamplePairs {
+  Points samples = Points(0, 3);                   ///< `[S,3]` samples, numbered face by face.
+  std::vector<int32_t> sample_face;                ///< `[S]` face of each sample.
+  std::vector<std::pair<int32_t, int32_t>> pairs;  ///< (sample a, sample b), object a < object b.
+};
+SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
+                              const std::vector<int32_t>& face_object, double threshold,
+                              int lattice = 3);
+
 /// Samples points on every face (a barycentric lattice with `lattice` subdivisions per edge, i.e.
 /// (lattice+1)(lattice+2)/2 points, corners included), pairs samples of faces of different objects
 /// strictly closer than `threshold` and returns them, ordered by the sample on face_a, then the

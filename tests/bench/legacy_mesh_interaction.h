@@ -5,117 +5,26 @@
 #pragma once
 
 #include <algorithm>
-#include <cmath>
-#include <iterator>
 #include <map>
 #include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
 
-#include "engine/core/error.h"
 #include "engine/geometry/interaction_points.h"
-#include "engine/geometry/kdtree_index.h"
 #include "engine/model/mesh_interaction.h"
 
 namespace dynscope::legacy {
 
-// Lattice samples of one object's faces, with the global sample number of each local point.
-struct InteractionObjectSamples {
-  std::vector<int32_t> sample;
-  Points points = Points(0, 3);
-};
-
-inline void check_interaction_inputs(const Points& vertices, const Faces& faces,
-                                     const std::vector<int32_t>& face_object, double threshold,
-                                     int lattice) {
-  if (face_object.size() != static_cast<size_t>(faces.rows())) {
-    throw ValueError("face_object", "has " + std::to_string(face_object.size()) + " entries for " +
-                                        std::to_string(faces.rows()) + " faces");
-  }
-  if (!std::isfinite(threshold) || threshold <= 0.0) {
-    throw ValueError("threshold", "must be finite and positive, got " + std::to_string(threshold));
-  }
-  if (lattice < 1) {
-    throw ValueError("lattice",
-                     "must be >= 1 subdivision per edge, got " + std::to_string(lattice));
-  }
-  if (!vertices.allFinite()) throw ValueError("vertices", "contain a non-finite coordinate");
-  const auto n = static_cast<int32_t>(vertices.rows());
-  if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= n)) {
-    throw ValueError("faces", "index out of range [0, " + std::to_string(n) + ")");
-  }
-}
-
+// The previous ordering of find_sample_pairs' pairs: one sort of them all, then the face pairs
+// sorted and made unique on their own.
 inline InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
                                                  const std::vector<int32_t>& face_object,
                                                  double threshold, int lattice = 3) {
-  check_interaction_inputs(vertices, faces, face_object, threshold, lattice);
-
-  // Barycentric lattice (i, j, lattice - i - j) / lattice, corners and edges included, numbered
-  // face by face so that sample order follows face order.
-  const int per_face = (lattice + 1) * (lattice + 2) / 2;
-  const Eigen::Index total = faces.rows() * per_face;
-  Points samples(total, 3);
-  std::vector<int32_t> sample_face(static_cast<size_t>(total));
-  Eigen::Index s = 0;
-  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
-    const Eigen::RowVector3d a = vertices.row(faces(f, 0));
-    const Eigen::RowVector3d b = vertices.row(faces(f, 1));
-    const Eigen::RowVector3d c = vertices.row(faces(f, 2));
-    for (int i = 0; i <= lattice; ++i) {
-      for (int j = 0; j <= lattice - i; ++j) {
-        const int k = lattice - i - j;
-        samples.row(s) = (i * a + j * b + k * c) / lattice;
-        sample_face[static_cast<size_t>(s)] = static_cast<int32_t>(f);
-        ++s;
-      }
-    }
-  }
-
-  // One tree per object, so a query only visits objects that can pair with it.
-  std::map<int32_t, InteractionObjectSamples> by_object;
-  for (Eigen::Index i = 0; i < total; ++i) {
-    by_object[face_object[static_cast<size_t>(sample_face[static_cast<size_t>(i)])]]
-        .sample.push_back(static_cast<int32_t>(i));
-  }
-  std::map<int32_t, KdIndex> trees;
-  std::map<int32_t, Aabb> boxes;
-  for (auto& [object, group] : by_object) {
-    group.points.resize(static_cast<Eigen::Index>(group.sample.size()), 3);
-    for (size_t j = 0; j < group.sample.size(); ++j) {
-      group.points.row(static_cast<Eigen::Index>(j)) = samples.row(group.sample[j]);
-    }
-    boxes.emplace(object, Aabb::of(group.points));
-    trees.emplace(object, KdIndex(group.points, "vertices"));
-  }
-
-  // Each unordered pair is found once, from the object with the smaller id.
-  const double sq_threshold = threshold * threshold;
-  std::vector<std::pair<int32_t, int32_t>> pairs;
-  std::vector<Neighbor> found;
-  for (auto it_a = by_object.begin(); it_a != by_object.end(); ++it_a) {
-    const Aabb& box_a = boxes.at(it_a->first);
-    for (auto it_b = std::next(it_a); it_b != by_object.end(); ++it_b) {
-      const Aabb& box_b = boxes.at(it_b->first);
-      const Vec3 gap = (box_a.min - box_b.max).cwiseMax(box_b.min - box_a.max).cwiseMax(0.0);
-      // Same summation order as squared_distance: with monotone rounding no sample pair of these
-      // objects can then be computed closer than the boxes.
-      if (gap.x() * gap.x() + gap.y() * gap.y() + gap.z() * gap.z() >= sq_threshold) continue;
-      const KdIndex& tree_b = trees.at(it_b->first);
-      for (size_t j = 0; j < it_a->second.sample.size(); ++j) {
-        tree_b.radius(it_a->second.points.row(static_cast<Eigen::Index>(j)).transpose(), threshold,
-                      found);
-        for (const Neighbor& n : found) {
-          // "Closer than" the threshold: strictly less.
-          if (n.sq_dist < sq_threshold) {
-            pairs.emplace_back(it_a->second.sample[j],
-                               it_b->second.sample[static_cast<size_t>(n.index)]);
-          }
-        }
-      }
-    }
-  }
+  SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice);
+  const Points& samples = found.samples;
+  const std::vector<int32_t>& sample_face = found.sample_face;
+  std::vector<std::pair<int32_t, int32_t>>& pairs = found.pairs;
   std::sort(pairs.begin(), pairs.end());
 
   InteractionPoints out;
@@ -165,15 +74,7 @@ inline MeshInteraction build_mesh_interaction(const Points& vertices,
                                               const std::vector<int32_t>& vertex_object_ids,
                                               const Faces& faces, double threshold, int lattice,
                                               int k) {
-  if (static_cast<Eigen::Index>(vertex_object_ids.size()) != vertices.rows()) {
-    throw ValueError("vertex_object_ids", "has " + std::to_string(vertex_object_ids.size()) +
-                                              " entries for " + std::to_string(vertices.rows()) +
-                                              " vertices");
-  }
-  if (k < 1) throw ValueError("k", "must be >= 1, got " + std::to_string(k));
-  if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= vertices.rows())) {
-    throw ValueError("faces", "index out of range [0, " + std::to_string(vertices.rows()) + ")");
-  }
+  // Inputs are valid in the tests and the benchmark (the library validates them).
   std::vector<int32_t> face_object(static_cast<size_t>(faces.rows()));
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     face_object[static_cast<size_t>(f)] = vertex_object_ids[static_cast<size_t>(faces(f, 0))];
