@@ -3,9 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <cstring>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -42,32 +40,6 @@ NeighborList empty_list(Eigen::Index rows, Eigen::Index k) {
   return l;
 }
 
-// A lattice sample: its face and position (equal coordinates compare equal, so 0 and -0 hash
-// alike).
-struct Sample {
-  int32_t face;
-  double x, y, z;
-  bool operator==(const Sample& o) const {
-    return face == o.face && x == o.x && y == o.y && z == o.z;
-  }
-};
-
-struct SampleHash {
-  size_t operator()(const Sample& s) const {
-    auto bits = [](double v) {
-      uint64_t b = 0;
-      const double canonical = v == 0.0 ? 0.0 : v;
-      std::memcpy(&b, &canonical, sizeof b);
-      return b;
-    };
-    uint64_t h = static_cast<uint64_t>(static_cast<uint32_t>(s.face)) * 0x9E3779B97F4A7C15ull;
-    for (const double v : {s.x, s.y, s.z}) {
-      h ^= bits(v) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
-    }
-    return static_cast<size_t>(h);
-  }
-};
-
 }  // namespace
 
 MeshInteraction build_mesh_interaction(const Points& vertices,
@@ -93,22 +65,27 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
   MeshInteraction out;
   // The same lattice sample may pair with several others; it is one interaction point, numbered
   // in the order of its first pair. Samples seen before are known by their number; a new one is
-  // looked up by face and position, which also merges the coinciding samples of a degenerate face.
+  // compared with the points already on its face, which merges the coinciding samples of a
+  // degenerate face. Per face: its interaction points (ascending) and the faces paired with it.
   const auto per_face = static_cast<size_t>((lattice + 1) * (lattice + 2) / 2);
   std::vector<int32_t> point_of_sample(n_faces * per_face, -1);
-  std::unordered_map<Sample, int32_t, SampleHash> seen;
+  std::vector<std::vector<int32_t>> on_face(n_faces), paired(n_faces);
   std::vector<Vec3> pts;
   auto add = [&](int32_t sample, int32_t face, const Eigen::RowVector3d& p) {
     int32_t& known = point_of_sample[static_cast<size_t>(sample)];
     if (known >= 0) return;
-    const auto [it, inserted] =
-        seen.emplace(Sample{face, p.x(), p.y(), p.z()}, static_cast<int32_t>(pts.size()));
-    known = it->second;
-    if (inserted) {
-      pts.push_back(p.transpose());
-      out.face.push_back(face);
-      out.object_ids.push_back(face_object[static_cast<size_t>(face)]);
+    std::vector<int32_t>& here = on_face[static_cast<size_t>(face)];
+    for (int32_t i : here) {
+      if (pts[static_cast<size_t>(i)] == p.transpose()) {
+        known = i;
+        return;
+      }
     }
+    known = static_cast<int32_t>(pts.size());
+    here.push_back(known);
+    pts.push_back(p.transpose());
+    out.face.push_back(face);
+    out.object_ids.push_back(face_object[static_cast<size_t>(face)]);
   };
   for (size_t p = 0; p < ip.size(); ++p) {
     add(ip.sample_a[p], ip.face_a[p], ip.point_a.row(static_cast<Eigen::Index>(p)));
@@ -118,12 +95,6 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
   out.points.resize(n_ip, 3);
   for (Eigen::Index i = 0; i < n_ip; ++i) out.points.row(i) = pts[static_cast<size_t>(i)];
 
-  // Per face: its interaction points (ascending) and the faces paired with it (in pair order).
-  std::vector<std::vector<int32_t>> on_face(n_faces), paired(n_faces);
-  for (Eigen::Index i = 0; i < n_ip; ++i) {
-    on_face[static_cast<size_t>(out.face[static_cast<size_t>(i)])].push_back(
-        static_cast<int32_t>(i));
-  }
   for (const auto& [fa, fb] : ip.face_pairs) {
     paired[static_cast<size_t>(fa)].push_back(fb);
     paired[static_cast<size_t>(fb)].push_back(fa);
