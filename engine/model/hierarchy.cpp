@@ -28,6 +28,11 @@ HierarchyOptions HierarchyOptions::from_config(const ModelConfig& config) {
   return o;
 }
 
+bool HierarchyOptions::point_relational_at(int level) const {
+  return point_relational &&
+         relates_objects_at(level, object_centric, point_relational, relational_top_only);
+}
+
 namespace {
 
 void check_options(const HierarchyOptions& o) {
@@ -136,8 +141,7 @@ void build_levels(const Points& points, const std::vector<int32_t>& object_ids,
     }
     indices[static_cast<size_t>(l)] = std::make_unique<LevelIndex>(options, level);
     const LevelIndex* index = indices[static_cast<size_t>(l)].get();
-    if (options.object_centric && options.point_relational &&
-        (l == 0 || !options.relational_top_only)) {
+    if (options.point_relational_at(l)) {
       // The task reads the level's points, ids and radius, which the chain no longer writes, and
       // writes only the level's relational list.
       HierarchyLevel* out = &level;

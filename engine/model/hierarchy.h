@@ -25,13 +25,16 @@ struct HierarchyOptions {
                                  ///< downsampling ignores object ids).
   bool point_relational = true;  ///< Build the point relational lists (false for mesh input,
                                  ///< whose relational path runs through interaction points).
-  bool relational_top_only = false;  ///< Point relational lists at level 0 only (the model has
-                                     ///< no relational units below it).
+  bool relational_top_only = false;    ///< Point relational lists at level 0 only (the model has
+                                       ///< no relational units below it).
   double interaction_threshold = 0.1;  ///< Mesh input: interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: lattice samples per face edge.
 
   /// Options matching a model configuration (object_centric is false for ModelKind::kFlat).
   static HierarchyOptions from_config(const ModelConfig& config);
+  /// Whether `level` gets a point relational list: point input at a level that relates objects
+  /// (relates_objects_at, the rule ModelConfig::has_relational follows).
+  bool point_relational_at(int level) const;
 };
 
 /// One level: its points and every neighbour list a forward pass uses there.

@@ -69,9 +69,14 @@ double ModelConfig::voxel_at(int level) const {
 
 double ModelConfig::radius_at(int level) const { return radius * std::pow(growth, level); }
 
+bool relates_objects_at(int level, bool object_centric, bool point_input,
+                        bool relational_top_only) {
+  return object_centric && (level == 0 || (point_input && !relational_top_only));
+}
+
 bool ModelConfig::has_relational(int level) const {
-  if (kind == ModelKind::kFlat) return false;
-  return level == 0 || (input == InputMode::kPoints && !relational_top_only);
+  return relates_objects_at(level, kind != ModelKind::kFlat, input == InputMode::kPoints,
+                            relational_top_only);
 }
 
 void ModelConfig::validate() const {

@@ -23,6 +23,12 @@ TargetMode parse_target_mode(const std::string& name);
 std::string to_string(InputMode mode);
 InputMode parse_input_mode(const std::string& name);
 
+/// The one rule of which levels of the U-Net relate objects: none without objects (the flat
+/// baseline); level 0 always; the levels below it only for point input without
+/// relational_top_only (mesh input relates objects through interaction points at level 0 only).
+/// ModelConfig::has_relational and the hierarchy's relational lists both follow it.
+bool relates_objects_at(int level, bool object_centric, bool point_input, bool relational_top_only);
+
 /// Everything needed to rebuild a model's architecture; stored as JSON inside every checkpoint.
 /// Levels: level 0 holds the input points, level l ≥ 1 is level l−1 grid-downsampled per object
 /// with voxel edge voxel·growth^(l−1); the relational radius at level l is radius·growth^l.

@@ -111,14 +111,14 @@ TEST(HierarchyTest, EveryListEqualsBruteForceOverItsLevels) {
       }
       if (l == 0) continue;
       const HierarchyLevel& prev = h.levels[l - 1];
-      expect_same_list(lv.down,
-                       brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids,
-                                       o.k, relation),
-                       what + " down");
-      expect_same_list(lv.up,
-                       brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids,
-                                       o.k, relation),
-                       what + " up");
+      expect_same_list(
+          lv.down,
+          brute_force_knn(lv.points, lv.object_ids, prev.points, prev.object_ids, o.k, relation),
+          what + " down");
+      expect_same_list(
+          lv.up,
+          brute_force_knn(prev.points, prev.object_ids, lv.points, lv.object_ids, o.k, relation),
+          what + " up");
     }
   }
 }
@@ -233,6 +233,39 @@ TEST(HierarchyTest, RelationalTopOnlyBuildsLevelZerosRelationalListAlone) {
     EXPECT_EQ(a.same.index, b.same.index);
     EXPECT_EQ(a.down.index, b.down.index);
     EXPECT_EQ(a.up.index, b.up.index);
+  }
+}
+
+// The hierarchy builds a point relational list exactly at the levels where the model configured
+// from the same options has a relational unit fed by points (one rule for both), for every kind,
+// input and relational_top_only.
+TEST(HierarchyTest, RelationalListsAreWhereTheModelRelatesPoints) {
+  const auto scene = make_scene(3, 80, 11);
+  for (ModelKind kind : {ModelKind::kPointConv, ModelKind::kGnn, ModelKind::kFlat}) {
+    for (InputMode input : {InputMode::kPoints, InputMode::kMesh}) {
+      for (bool top_only : {false, true}) {
+        ModelConfig c = ModelConfig::preset("physion");
+        c.kind = kind;
+        c.input = input;
+        c.relational_top_only = top_only;
+        c.levels = 3;
+        c.voxel = 0.08;
+        const HierarchyOptions o = HierarchyOptions::from_config(c);
+        const std::string what =
+            to_string(kind) + " " + to_string(input) + (top_only ? " top only" : "");
+        for (int l = 0; l < c.levels; ++l) {
+          EXPECT_EQ(o.point_relational_at(l), c.has_relational(l) && input == InputMode::kPoints)
+              << what << ", level " << l;
+        }
+        if (input == InputMode::kMesh) continue;  // mesh input needs faces to build
+        const Hierarchy h = build_hierarchy(scene.points, scene.ids, o);
+        for (int l = 0; l < h.num_levels(); ++l) {
+          EXPECT_EQ(h.levels[static_cast<size_t>(l)].relational.rows() > 0,
+                    o.point_relational_at(l))
+              << what << ", level " << l;
+        }
+      }
+    }
   }
 }
 
