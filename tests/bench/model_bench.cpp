@@ -453,6 +453,8 @@ BENCHMARK(BM_MeshInteraction)
     ->Args({1, 40})
     ->Args({0, 60})
     ->Args({1, 60})
+    ->Args({0, 80})
+    ->Args({1, 80})
     ->ArgNames({"impl", "threshold_cm"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
