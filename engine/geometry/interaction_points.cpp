@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/core/error.h"
@@ -102,8 +103,9 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
       if (gap.x() * gap.x() + gap.y() * gap.y() + gap.z() * gap.z() >= sq_threshold) continue;
       const KdIndex& tree_b = trees.at(it_b->first);
       for (size_t j = 0; j < it_a->second.sample.size(); ++j) {
+        // Unsorted: the callers order the pairs by sample number.
         tree_b.radius(it_a->second.points.row(static_cast<Eigen::Index>(j)).transpose(), threshold,
-                      found);
+                      found, false);
         for (const Neighbor& n : found) {
           // "Closer than" the threshold: strictly less.
           if (n.sq_dist < sq_threshold) {
@@ -117,66 +119,89 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
   return out;
 }
 
+GroupedSamplePairs find_grouped_sample_pairs(const Points& vertices, const Faces& faces,
+                                             const std::vector<int32_t>& face_object,
+                                             double threshold, int lattice) {
+  SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice);
+  GroupedSamplePairs out;
+  out.samples = std::move(found.samples);
+  out.sample_face = std::move(found.sample_face);
+  const auto total = static_cast<size_t>(out.samples.rows());
+  // Bucketed by the first sample (a counting sort).
+  out.start.assign(total + 1, 0);
+  for (const auto& [a, b] : found.pairs) ++out.start[static_cast<size_t>(a) + 1];
+  for (size_t i = 1; i <= total; ++i) out.start[i] += out.start[i - 1];
+  out.partner.resize(found.pairs.size());
+  {
+    std::vector<size_t> next(out.start.begin(), out.start.end() - 1);
+    for (const auto& [a, b] : found.pairs) out.partner[next[static_cast<size_t>(a)]++] = b;
+  }
+  // Samples are numbered face by face, so the first samples' faces never decrease: each face's
+  // distinct partner faces are collected (marked per face, not sorted with their repeats),
+  // sorted and appended when the next face begins.
+  std::vector<int32_t> marked(static_cast<size_t>(faces.rows()), -1);
+  std::vector<int32_t> partners;
+  int32_t current = -1;
+  auto flush = [&]() {
+    std::sort(partners.begin(), partners.end());
+    for (int32_t fb : partners) out.face_pairs.emplace_back(current, fb);
+    partners.clear();
+  };
+  for (size_t a = 0; a < total; ++a) {
+    if (out.start[a] == out.start[a + 1]) continue;
+    const int32_t fa = out.sample_face[a];
+    if (fa != current) {
+      flush();
+      current = fa;
+    }
+    for (size_t p = out.start[a]; p < out.start[a + 1]; ++p) {
+      const int32_t fb = out.sample_face[static_cast<size_t>(out.partner[p])];
+      if (marked[static_cast<size_t>(fb)] == fa) continue;
+      marked[static_cast<size_t>(fb)] = fa;
+      partners.push_back(fb);
+    }
+  }
+  flush();
+  return out;
+}
+
 InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
                                           const std::vector<int32_t>& face_object, double threshold,
                                           int lattice) {
-  const SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice);
+  GroupedSamplePairs found =
+      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice);
   const Points& samples = found.samples;
   const std::vector<int32_t>& sample_face = found.sample_face;
-  const std::vector<std::pair<int32_t, int32_t>>& pairs = found.pairs;
-  const Eigen::Index total = samples.rows();
-  // The pairs in (sample a, sample b) order: bucketed by their first sample (a counting sort),
-  // then each bucket's second samples sorted, which is a full sort's order in linear time plus
-  // small sorts.
-  std::vector<size_t> start(static_cast<size_t>(total) + 1, 0);
-  for (const auto& [a, b] : pairs) ++start[static_cast<size_t>(a) + 1];
-  for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-  std::vector<int32_t> second(pairs.size());
-  {
-    std::vector<size_t> next(start.begin(), start.end() - 1);
-    for (const auto& [a, b] : pairs) second[next[static_cast<size_t>(a)]++] = b;
-  }
-
+  const auto n_pairs = static_cast<Eigen::Index>(found.pairs());
   InteractionPoints out;
-  out.point_a.resize(static_cast<Eigen::Index>(pairs.size()), 3);
-  out.point_b.resize(static_cast<Eigen::Index>(pairs.size()), 3);
+  out.point_a.resize(n_pairs, 3);
+  out.point_b.resize(n_pairs, 3);
   for (auto* v :
        {&out.sample_a, &out.sample_b, &out.face_a, &out.face_b, &out.object_a, &out.object_b}) {
-    v->reserve(pairs.size());
+    v->reserve(found.pairs());
   }
-  // Samples are numbered face by face, so face_a never decreases along the pairs: each face's
-  // partners are collected, sorted and made unique when the next face begins.
-  std::vector<int32_t> partners;
-  auto flush_partners = [&](int32_t fa) {
-    std::sort(partners.begin(), partners.end());
-    partners.erase(std::unique(partners.begin(), partners.end()), partners.end());
-    for (int32_t fb : partners) out.face_pairs.emplace_back(fa, fb);
-    partners.clear();
-  };
-  size_t p = 0;
-  for (Eigen::Index a = 0; a < total; ++a) {
-    const auto begin = second.begin() + static_cast<std::ptrdiff_t>(start[static_cast<size_t>(a)]);
-    const auto end =
-        second.begin() + static_cast<std::ptrdiff_t>(start[static_cast<size_t>(a) + 1]);
-    if (begin == end) continue;
-    std::sort(begin, end);
+  // In (sample a, sample b) order: each group's partners sorted.
+  Eigen::Index row = 0;
+  for (Eigen::Index a = 0; a < samples.rows(); ++a) {
     const int32_t fa = sample_face[static_cast<size_t>(a)];
-    if (!out.face_a.empty() && out.face_a.back() != fa) flush_partners(out.face_a.back());
-    for (auto it = begin; it != end; ++it, ++p) {
-      const auto row = static_cast<Eigen::Index>(p);
-      const int32_t fb = sample_face[static_cast<size_t>(*it)];
+    const size_t begin = found.start[static_cast<size_t>(a)];
+    const size_t end = found.start[static_cast<size_t>(a) + 1];
+    std::sort(found.partner.begin() + static_cast<std::ptrdiff_t>(begin),
+              found.partner.begin() + static_cast<std::ptrdiff_t>(end));
+    for (size_t p = begin; p < end; ++p, ++row) {
+      const int32_t b = found.partner[p];
+      const int32_t fb = sample_face[static_cast<size_t>(b)];
       out.point_a.row(row) = samples.row(a);
-      out.point_b.row(row) = samples.row(*it);
+      out.point_b.row(row) = samples.row(b);
       out.sample_a.push_back(static_cast<int32_t>(a));
-      out.sample_b.push_back(*it);
+      out.sample_b.push_back(b);
       out.face_a.push_back(fa);
       out.face_b.push_back(fb);
       out.object_a.push_back(face_object[static_cast<size_t>(fa)]);
       out.object_b.push_back(face_object[static_cast<size_t>(fb)]);
-      partners.push_back(fb);
     }
   }
-  if (!out.face_a.empty()) flush_partners(out.face_a.back());
+  out.face_pairs = found.face_pairs;
   return out;
 }
 

@@ -36,6 +36,24 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
                               const std::vector<int32_t>& face_object, double threshold,
                               int lattice = 3);
 
+/// find_sample_pairs' pairs grouped by their first sample, kept compact: the partners of sample a
+/// are partner[start[a], start[a+1]), in no particular order. `face_pairs` lists the distinct
+/// (face of a, face of b) pairs, ascending, as InteractionPoints does. Callers that need the
+/// interaction points rather than every pair in order (build_mesh_interaction) read this instead
+/// of one record per pair.
+struct GroupedSamplePairs {
+  Points samples = Points(0, 3);     ///< `[S,3]` as SamplePairs.
+  std::vector<int32_t> sample_face;  ///< `[S]` as SamplePairs.
+  std::vector<size_t> start;         ///< `[S+1]` offsets into `partner`.
+  std::vector<int32_t> partner;      ///< `[pairs]` second samples, grouped by first sample.
+  std::vector<std::pair<int32_t, int32_t>> face_pairs;
+
+  size_t pairs() const { return partner.size(); }
+};
+GroupedSamplePairs find_grouped_sample_pairs(const Points& vertices, const Faces& faces,
+                                             const std::vector<int32_t>& face_object,
+                                             double threshold, int lattice = 3);
+
 /// Samples points on every face (a barycentric lattice with `lattice` subdivisions per edge, i.e.
 /// (lattice+1)(lattice+2)/2 points, corners included), pairs samples of faces of different objects
 /// strictly closer than `threshold` and returns them, ordered by the sample on face_a, then the

@@ -533,7 +533,8 @@ size_t KdIndex::knn_rows(const double* queries, size_t m, int k, Neighbor* out) 
   return wanted;
 }
 
-void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const {
+void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& out,
+                     bool sorted) const {
   out.clear();
   if (!query.allFinite()) throw ValueError("query", "point is not finite");
   if (points_.rows() == 0 || !(radius >= 0.0)) return;
@@ -544,6 +545,7 @@ void KdIndex::radius(const Vec3& query, double radius, std::vector<Neighbor>& ou
   }
   RadiusResult result(tree_->original.data(), out, sq_limit);
   tree_->search(query.data(), result);
+  if (!sorted) return;
   std::sort(out.begin(), out.end(),
             [](const Neighbor& a, const Neighbor& b) { return neighbor_less(a, b); });
 }

@@ -84,9 +84,11 @@ class KdIndex {
   /// query.
   size_t knn_rows(const double* queries, size_t m, int k, Neighbor* out) const;
 
-  /// Replaces `out` with every point whose squared distance to `query` is <= radius², sorted.
-  /// Throws ValueError for a non-finite query.
-  void radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const;
+  /// Replaces `out` with every point whose squared distance to `query` is <= radius², sorted
+  /// (nearest first, ties by index) unless `sorted` is false, which leaves them in an unspecified
+  /// order for callers that order them their own way. Throws ValueError for a non-finite query.
+  void radius(const Vec3& query, double radius, std::vector<Neighbor>& out,
+              bool sorted = true) const;
 
   /// Receives one indexed point's answer from knn_self: its index and its sorted neighbours.
   using SelfAnswer = std::function<void(Eigen::Index point, const Neighbor* nearest, size_t count)>;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,19 +17,30 @@ namespace dynscope {
 namespace {
 
 // Fills row `row` of `list` with the list.k() nearest of `candidates` to `query`, nearest first
-// (ties: lower index). Only the kept ones are ordered: a selection, then a sort of those.
+// (ties: lower index; the candidates are distinct). When there are more candidates than that, one
+// pass keeps the best so far in order and inserts a candidate only when it is nearer than the
+// last of them, which most candidates of a long list are not; else they are sorted.
 void fill_row(NeighborList& list, Eigen::Index row, const Vec3& query, const Points& source,
               const std::vector<int32_t>& candidates,
-              std::vector<std::pair<double, int32_t>>& scratch) {
-  scratch.clear();
-  for (int32_t c : candidates)
-    scratch.emplace_back(squared_distance(source.row(c).transpose(), query), c);
-  const size_t n = std::min(scratch.size(), static_cast<size_t>(list.k()));
-  const auto kept = scratch.begin() + static_cast<std::ptrdiff_t>(n);
-  if (kept != scratch.end()) std::nth_element(scratch.begin(), kept, scratch.end());
-  std::sort(scratch.begin(), kept);
-  for (size_t j = 0; j < n; ++j) {
-    list.index(row, static_cast<Eigen::Index>(j)) = scratch[j].second;
+              std::vector<std::pair<double, int32_t>>& best) {
+  const auto k = static_cast<size_t>(list.k());
+  best.clear();
+  if (candidates.size() <= k) {
+    for (int32_t c : candidates)
+      best.emplace_back(squared_distance(source.row(c).transpose(), query), c);
+    std::sort(best.begin(), best.end());
+  } else {
+    for (int32_t c : candidates) {
+      const std::pair<double, int32_t> e(squared_distance(source.row(c).transpose(), query), c);
+      if (best.size() == k) {
+        if (!(e < best.back())) continue;
+        best.pop_back();
+      }
+      best.insert(std::upper_bound(best.begin(), best.end(), e), e);
+    }
+  }
+  for (size_t j = 0; j < best.size(); ++j) {
+    list.index(row, static_cast<Eigen::Index>(j)) = best[j].second;
     list.mask(row, static_cast<Eigen::Index>(j)) = 1;
   }
 }
@@ -59,43 +71,57 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     face_object[static_cast<size_t>(f)] = vertex_object_ids[static_cast<size_t>(faces(f, 0))];
   }
-  const InteractionPoints ip =
-      find_interaction_points(vertices, faces, face_object, threshold, lattice);
+  const GroupedSamplePairs sp =
+      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice);
 
   MeshInteraction out;
   // The same lattice sample may pair with several others; it is one interaction point, numbered
-  // in the order of its first pair. Samples seen before are known by their number; a new one is
-  // compared with the points already on its face, which merges the coinciding samples of a
-  // degenerate face. Per face: its interaction points (ascending) and the faces paired with it.
-  const auto per_face = static_cast<size_t>((lattice + 1) * (lattice + 2) / 2);
-  std::vector<int32_t> point_of_sample(n_faces * per_face, -1);
+  // in the order of its first appearance in the pairs taken in (sample a, sample b) order, each
+  // pair's a before its b. That order needs no sort of the pairs: sample x first appears at
+  // (x, before any partner) if it pairs as a first sample, else at its smallest (a, x); one pass
+  // takes the smallest such key of every sample, and only the samples are sorted by it.
+  const auto n_samples = static_cast<int64_t>(sp.samples.rows());
+  constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
+  std::vector<int64_t> first(static_cast<size_t>(n_samples), kNever);
+  for (int64_t a = 0; a < n_samples; ++a) {
+    const size_t begin = sp.start[static_cast<size_t>(a)];
+    const size_t end = sp.start[static_cast<size_t>(a) + 1];
+    if (begin == end) continue;
+    const int64_t base = a * (n_samples + 1);
+    first[static_cast<size_t>(a)] = std::min(first[static_cast<size_t>(a)], base);
+    for (size_t p = begin; p < end; ++p) {
+      int64_t& key = first[static_cast<size_t>(sp.partner[p])];
+      key = std::min(key, base + 1 + sp.partner[p]);
+    }
+  }
+  std::vector<std::pair<int64_t, int32_t>> order;
+  for (int64_t x = 0; x < n_samples; ++x) {
+    if (first[static_cast<size_t>(x)] != kNever)
+      order.emplace_back(first[static_cast<size_t>(x)], static_cast<int32_t>(x));
+  }
+  std::sort(order.begin(), order.end());
+  // Each sample in that order becomes a new point unless it coincides with a point already on its
+  // face, which merges the coinciding samples of a degenerate face. Per face: its interaction
+  // points (ascending) and the faces paired with it.
   std::vector<std::vector<int32_t>> on_face(n_faces), paired(n_faces);
   std::vector<Vec3> pts;
-  auto add = [&](int32_t sample, int32_t face, const Eigen::RowVector3d& p) {
-    int32_t& known = point_of_sample[static_cast<size_t>(sample)];
-    if (known >= 0) return;
+  for (const auto& [key, sample] : order) {
+    const int32_t face = sp.sample_face[static_cast<size_t>(sample)];
+    const Vec3 p = sp.samples.row(sample).transpose();
     std::vector<int32_t>& here = on_face[static_cast<size_t>(face)];
-    for (int32_t i : here) {
-      if (pts[static_cast<size_t>(i)] == p.transpose()) {
-        known = i;
-        return;
-      }
-    }
-    known = static_cast<int32_t>(pts.size());
-    here.push_back(known);
-    pts.push_back(p.transpose());
+    bool merged = false;
+    for (int32_t i : here) merged = merged || pts[static_cast<size_t>(i)] == p;
+    if (merged) continue;
+    here.push_back(static_cast<int32_t>(pts.size()));
+    pts.push_back(p);
     out.face.push_back(face);
     out.object_ids.push_back(face_object[static_cast<size_t>(face)]);
-  };
-  for (size_t p = 0; p < ip.size(); ++p) {
-    add(ip.sample_a[p], ip.face_a[p], ip.point_a.row(static_cast<Eigen::Index>(p)));
-    add(ip.sample_b[p], ip.face_b[p], ip.point_b.row(static_cast<Eigen::Index>(p)));
   }
   const auto n_ip = static_cast<Eigen::Index>(pts.size());
   out.points.resize(n_ip, 3);
   for (Eigen::Index i = 0; i < n_ip; ++i) out.points.row(i) = pts[static_cast<size_t>(i)];
 
-  for (const auto& [fa, fb] : ip.face_pairs) {
+  for (const auto& [fa, fb] : sp.face_pairs) {
     paired[static_cast<size_t>(fa)].push_back(fb);
     paired[static_cast<size_t>(fb)].push_back(fa);
   }

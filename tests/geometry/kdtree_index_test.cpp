@@ -103,6 +103,12 @@ TEST(KdIndexTest, TiesAndDuplicatesResolveToTheLowestIndex) {
         }
         index.radius(q, r, found);
         expect_same(found, within);
+        // Unsorted: the same set (each point once), in the tree's order.
+        index.radius(q, r, found, false);
+        std::sort(found.begin(), found.end(), [](const Neighbor& a, const Neighbor& b) {
+          return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
+        });
+        expect_same(found, within);
       }
     }
   }

@@ -125,7 +125,7 @@ TEST(MeshInteractionTest, ListsEqualTheReferenceFormulation) {
                              {"movi-like seed 2", make_movi_like_meshes(7, 2)}};
   int64_t compared_points = 0;
   for (const Case& c : cases) {
-    for (const double threshold : {0.1, 0.4, 0.6}) {
+    for (const double threshold : {0.1, 0.4, 0.6, 0.8}) {
       for (const int k : {2, 12, 64}) {
         const std::string what =
             c.name + ", threshold " + std::to_string(threshold) + ", k " + std::to_string(k);
