@@ -201,7 +201,7 @@ InteractionPoints find_interaction_points(const Points& vertices, const Faces& f
       out.object_b.push_back(face_object[static_cast<size_t>(fb)]);
     }
   }
-  out.face_pairs = found.face_pairs;
+  out.face_pairs = std::move(found.face_pairs);
   return out;
 }
 

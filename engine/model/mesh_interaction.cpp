@@ -109,9 +109,9 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
     const int32_t face = sp.sample_face[static_cast<size_t>(sample)];
     const Vec3 p = sp.samples.row(sample).transpose();
     std::vector<int32_t>& here = on_face[static_cast<size_t>(face)];
-    bool merged = false;
-    for (int32_t i : here) merged = merged || pts[static_cast<size_t>(i)] == p;
-    if (merged) continue;
+    if (std::any_of(here.begin(), here.end(),
+                    [&](int32_t i) { return pts[static_cast<size_t>(i)] == p; }))
+      continue;
     here.push_back(static_cast<int32_t>(pts.size()));
     pts.push_back(p);
     out.face.push_back(face);

@@ -15,14 +15,17 @@
 namespace dynscope {
 namespace {
 
+// The order every sorted answer must have: nearest first, ties by index.
+bool nearer(const Neighbor& a, const Neighbor& b) {
+  return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
+}
+
 std::vector<Neighbor> brute_force(const Points& points, const Vec3& q) {
   std::vector<Neighbor> all;
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     all.push_back({squared_distance(q, points.row(i).transpose()), static_cast<int32_t>(i)});
   }
-  std::sort(all.begin(), all.end(), [](const Neighbor& a, const Neighbor& b) {
-    return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
-  });
+  std::sort(all.begin(), all.end(), nearer);
   return all;
 }
 
@@ -105,9 +108,7 @@ TEST(KdIndexTest, TiesAndDuplicatesResolveToTheLowestIndex) {
         expect_same(found, within);
         // Unsorted: the same set (each point once), in the tree's order.
         index.radius(q, r, found, false);
-        std::sort(found.begin(), found.end(), [](const Neighbor& a, const Neighbor& b) {
-          return a.sq_dist < b.sq_dist || (a.sq_dist == b.sq_dist && a.index < b.index);
-        });
+        std::sort(found.begin(), found.end(), nearer);
         expect_same(found, within);
       }
     }
