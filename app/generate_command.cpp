@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/scenario.h"
+#include "engine/sim/shapes.h"
 
 namespace dynscope::app {
 namespace {
@@ -78,6 +79,17 @@ void add_generate_command(CLI::App& app) {
   cmd->add_flag("--balance", args->balance,
                 "Physion-like scenarios: draw a trial again until scene i's outcome is\n"
                 "(i + i / 10) % 2, so that every 20 scenes (and each split) are half positive");
+  cmd->add_option_function<std::string>(
+         "--mesh-density",
+         [args](const std::string& name) {
+           args->mesh_density = parse_mesh_density(name, "--mesh-density");
+         },
+         "Tessellation of the stored meshes of primitive shapes (the simulation is the same):\n"
+         "dense (default) spreads vertices over every face; sparse keeps the fewest that hold\n"
+         "the shape (a box's 8 corners, a cylinder's two rims), so that flat faces have no\n"
+         "vertices inside, for the model's mesh input with face reasoning")
+      ->check(CLI::IsMember({"dense", "sparse"}))
+      ->default_str("dense");
   cmd->add_option("--meshes", args->meshes_dir,
                   "Directory of mesh files (OBJ, PLY, STL, glTF, ...) drawn as objects by movi-c");
   cmd->callback([args] { run_generate(*args); });

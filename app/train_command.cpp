@@ -17,6 +17,7 @@
 #include "engine/core/log.h"
 #include "engine/core/threads.h"
 #include "engine/io/temp_file.h"
+#include "engine/sim/shapes.h"
 #include "engine/train/process_group.h"
 #include "engine/train/trainer.h"
 
@@ -97,6 +98,10 @@ TrainOptions build_options(const TrainArgs& a) {
   if (o.data_dirs.empty()) throw ValueError("data", "no dataset directory (--data or recipe)");
   if (o.out.empty()) throw ValueError("out", "no checkpoint path (--out or recipe)");
   require_output_directory("--out", o.out);
+  for (size_t i = 0; i < o.datasets.size(); ++i) {
+    parse_mesh_density(o.datasets[i].mesh_density,
+                       "recipe datasets[" + std::to_string(i) + "].mesh_density");
+  }
   if (!o.log_csv.empty()) {
     // A recipe's log lives under out/, which a fresh clone does not have yet: make its directory
     // (an existing file where a directory should be is reported just below, before any work).
@@ -119,6 +124,7 @@ void generate_missing_datasets(const TrainOptions& options) {
     g.frame_rate_hz = d.frame_rate_hz;
     g.hide_outcome_frames = d.hide_outcome_frames;
     g.balance = d.balance;
+    g.mesh_density = parse_mesh_density(d.mesh_density, "recipe datasets mesh_density");
     g.out_dir = d.out;
     g.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     std::printf("generating %lld %s scenes (seed %llu) into %s\n", static_cast<long long>(g.count),

@@ -85,6 +85,7 @@ std::string manifest_text(const DatasetOptions& options, const std::vector<std::
   // The rate and frame count as stored (a --frame-rate replaces the scenario's own).
   m["parameters"]["frame_rate_hz"] = first.physics_rate_hz / first.substeps_per_frame;
   m["parameters"]["num_frames"] = first.num_frames;
+  m["parameters"]["mesh_density"] = mesh_density_name(first.mesh_density);
   if (!mesh_files.empty()) m["meshes"] = mesh_files;
   const bool labelled = scenario_has_contact_label(options.scenario);
   if (labelled) {
@@ -170,6 +171,7 @@ void check_dataset_options(const DatasetOptions& options) {
   if (!(options.frame_rate_hz >= 0) || !std::isfinite(options.frame_rate_hz)) {
     throw ValueError("frame_rate", "must be a positive rate in Hz (or 0: the scenario's own)");
   }
+  check_mesh_density(options.scenario, options.mesh_density);
   const bool labelled = scenario_has_contact_label(options.scenario);
   if (options.balance && !labelled) {
     throw ValueError(
@@ -224,6 +226,7 @@ DatasetSummary generate_dataset(const DatasetOptions& options, Progress* progres
     }
   }
   scenario_options.frame_rate_hz = options.frame_rate_hz;
+  scenario_options.mesh_density = options.mesh_density;
   // Building one setup up front reports scenario-specific input errors before any thread starts.
   const SimSetup first =
       scenario_setup(options.scenario, derive_seed(options.seed, 0), scenario_options);

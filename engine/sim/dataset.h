@@ -7,6 +7,7 @@
 
 #include "engine/core/progress.h"
 #include "engine/scene/mesh.h"
+#include "engine/sim/shapes.h"
 
 namespace dynscope {
 
@@ -19,6 +20,8 @@ struct DatasetOptions {
   int jobs = 1;              ///< Worker threads, >= 1; results do not depend on it.
   std::string meshes_dir;    ///< Mesh files for "movi-c"; must be empty for other scenarios.
   double frame_rate_hz = 0;  ///< Stored frames per second; 0: the scenario's own (set_frame_rate).
+  /// Tessellation of the stored meshes of primitive shapes (ScenarioOptions::mesh_density).
+  MeshDensity mesh_density = MeshDensity::kDense;
   /// > 0: a trial whose target touches the zone in its first this many frames is drawn again
   /// (labelled scenarios only), so that an observer of those frames cannot read its outcome.
   int hide_outcome_frames = 0;

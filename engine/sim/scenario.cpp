@@ -105,10 +105,21 @@ SimSetup scenario_own_setup(const std::string& scenario, uint64_t seed,
 
 }  // namespace
 
+void check_mesh_density(const std::string& scenario, MeshDensity density) {
+  if (density != MeshDensity::kDense && scenario_needs_meshes(scenario)) {
+    throw ValueError("mesh_density", scenario +
+                                         " draws the given meshes as they are; only "
+                                         "the primitive shapes of other scenarios can "
+                                         "be sparse");
+  }
+}
+
 SimSetup scenario_setup(const std::string& scenario, uint64_t seed,
                         const ScenarioOptions& options) {
+  check_mesh_density(scenario, options.mesh_density);
   SimSetup setup = scenario_own_setup(scenario, seed, options);
   if (options.frame_rate_hz != 0.0) set_frame_rate(setup, options.frame_rate_hz);
+  setup.mesh_density = options.mesh_density;
   return setup;
 }
 

@@ -17,6 +17,9 @@ struct ScenarioOptions {
   /// Stored frames per second; 0 keeps the scenario's own rate. Other rates store the same
   /// simulation more or less densely (set_frame_rate).
   double frame_rate_hz = 0.0;
+  /// Tessellation of the stored meshes of primitive shapes (SimSetup::mesh_density); "movi-c"
+  /// draws user meshes and accepts kDense only.
+  MeshDensity mesh_density = MeshDensity::kDense;
 };
 
 /// Names of every scenario generate_scene() accepts ("movi-a", "movi-c", "drop", "collide", ...).
@@ -37,6 +40,10 @@ bool scenario_needs_meshes(const std::string& scenario);
 /// The scenario's recipe constants and sampling ranges as a JSON object text (for manifests).
 /// Throws ValueError for an unknown name.
 std::string scenario_parameters_json(const std::string& scenario);
+
+/// Throws ValueError("mesh_density") unless the scenario's meshes can be stored at `density`
+/// ("movi-c" draws the given meshes as they are: dense only).
+void check_mesh_density(const std::string& scenario, MeshDensity density);
 
 /// The Bullet setup (bodies, initial poses and velocities, rates) of one trial, before it is
 /// simulated. Throws ValueError for an unknown scenario (listing the known ones), for "movi-c"

@@ -202,17 +202,30 @@ ShapePart scaled_part(const ShapePart& part, const Vec3& scale) {
   return out;
 }
 
-Mesh part_mesh(const ShapePart& part) {
+std::string mesh_density_name(MeshDensity density) {
+  return density == MeshDensity::kSparse ? "sparse" : "dense";
+}
+
+MeshDensity parse_mesh_density(const std::string& name, const std::string& what) {
+  if (name == "dense") return MeshDensity::kDense;
+  if (name == "sparse") return MeshDensity::kSparse;
+  throw ValueError(what, "must be \"dense\" or \"sparse\", got \"" + name + "\"");
+}
+
+Mesh part_mesh(const ShapePart& part, MeshDensity density) {
+  const bool sparse = density == MeshDensity::kSparse;
   Mesh m;
   switch (part.kind) {
     case ShapeKind::kBox:
-      m = make_grid_box_mesh(part.half_extents);
+      m = make_grid_box_mesh(part.half_extents, sparse ? 1 : kBoxDivisions);
       break;
     case ShapeKind::kSphere:
       m = make_sphere_mesh(part.half_extents.x(), kSphereRings, kSphereSegments);
       break;
     case ShapeKind::kCylinder:
-      m = make_grid_cylinder_mesh(part.half_extents.x(), part.half_extents.z());
+      m = sparse ? make_grid_cylinder_mesh(part.half_extents.x(), part.half_extents.z(),
+                                           kCylinderSegments, 1, 1)
+                 : make_grid_cylinder_mesh(part.half_extents.x(), part.half_extents.z());
       break;
     case ShapeKind::kConvexHull:
       m = part.hull_mesh;
@@ -222,10 +235,10 @@ Mesh part_mesh(const ShapePart& part) {
   return m;
 }
 
-Mesh body_mesh(const std::vector<ShapePart>& parts) {
+Mesh body_mesh(const std::vector<ShapePart>& parts, MeshDensity density) {
   Mesh out;
   for (const ShapePart& part : parts) {
-    const Mesh m = part_mesh(part);
+    const Mesh m = part_mesh(part, density);
     const Eigen::Index v0 = out.vertices.rows(), f0 = out.faces.rows();
     out.vertices.conservativeResize(v0 + m.vertices.rows(), 3);
     out.vertices.bottomRows(m.vertices.rows()) = m.vertices;

@@ -33,6 +33,20 @@ inline constexpr int kCylinderSegments = 32;
 inline constexpr int kCylinderRows = 4;
 inline constexpr int kCylinderCapRings = 2;
 
+/// How densely the stored meshes tessellate the primitive parts (the collision shapes, and so the
+/// simulation, are the same either way). kDense: the grids above, vertices spread over every face
+/// (unit box 98 vertices, cylinder 226, sphere 482). kSparse: the fewest vertices that keep each
+/// shape: a box's 8 corners, a cylinder's two rims of kCylinderSegments and a centre per cap (66),
+/// the same sphere; flat faces then hold no vertices inside them, the situation of the simple
+/// shapes of the paper's MOVi-A in which its mesh-face reasoning helped. Hulls are kept as given.
+enum class MeshDensity { kDense, kSparse };
+
+/// "dense" or "sparse".
+std::string mesh_density_name(MeshDensity density);
+
+/// The density named `name` ("dense" or "sparse"); throws ValueError(`what`) for another name.
+MeshDensity parse_mesh_density(const std::string& name, const std::string& what);
+
 /// Closed box centred at the origin with each face split into `divisions`² quads (welded
 /// vertices, outward CCW faces). Throws ValueError if a half extent is not positive or
 /// divisions < 1.
@@ -58,12 +72,12 @@ void check_part(const ShapePart& part, const Vec3& scale, const std::string& wha
 ShapePart scaled_part(const ShapePart& part, const Vec3& scale);
 
 /// Triangle mesh of one part in the body frame (unscaled), matching its collision shape: box
-/// and hull exactly, sphere and cylinder as inscribed tessellations.
-Mesh part_mesh(const ShapePart& part);
+/// and hull exactly, sphere and cylinder as inscribed tessellations, at `density`.
+Mesh part_mesh(const ShapePart& part, MeshDensity density = MeshDensity::kDense);
 
 /// Concatenated meshes of all parts in the body frame (unscaled); parts stay separate
 /// components, so a concave body made of convex parts keeps its exact shape.
-Mesh body_mesh(const std::vector<ShapePart>& parts);
+Mesh body_mesh(const std::vector<ShapePart>& parts, MeshDensity density = MeshDensity::kDense);
 
 /// Volume (scene units³) of a body with `scale` applied: sum of its parts (overlaps counted
 /// twice; the generators never overlap parts). Hull volume is its mesh's enclosed volume.

@@ -79,7 +79,7 @@ Scene simulate(const SimSetup& setup) {
     world.add_body(body);
     Object o = body.object;
     o.rigid = true;
-    o.mesh = body_mesh(body.parts);
+    o.mesh = body_mesh(body.parts, setup.mesh_density);
     scene.objects.push_back(std::move(o));
   }
   for (const BallJoint& j : setup.joints) world.add_ball_joint(j.body_a, j.body_b, j.pivot);

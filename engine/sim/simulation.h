@@ -48,6 +48,8 @@ struct SimSetup {
   /// Largest contact-point distance (scene units) that still counts as the target touching the
   /// zone.
   double contact_tolerance = 1e-3;
+  /// Tessellation of the stored meshes of primitive parts (not of what Bullet simulates).
+  MeshDensity mesh_density = MeshDensity::kDense;
   std::vector<BodySpec> bodies;
   std::vector<BallJoint> joints;
 

@@ -73,6 +73,7 @@ std::string TrainOptions::to_json() const {
       if (d.frame_rate_hz != 0) entry["frame_rate_hz"] = d.frame_rate_hz;
       if (d.hide_outcome_frames != 0) entry["hide_outcome_frames"] = d.hide_outcome_frames;
       if (d.balance) entry["balance"] = true;
+      if (d.mesh_density != "dense") entry["mesh_density"] = d.mesh_density;
       list.push_back(entry);
     }
     j["datasets"] = list;
@@ -159,6 +160,7 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
         r.frame_rate_hz = d.value("frame_rate_hz", 0.0);
         r.hide_outcome_frames = d.value("hide_outcome_frames", 0);
         r.balance = d.value("balance", false);
+        r.mesh_density = d.value("mesh_density", std::string("dense"));
         o.datasets.push_back(r);
       }
     }

@@ -20,9 +20,10 @@ struct DatasetRecipe {
   std::string scenario;
   int64_t count = 0;
   uint64_t seed = 0;
-  double frame_rate_hz = 0;     ///< 0: the scenario's own (generate --frame-rate).
-  int hide_outcome_frames = 0;  ///< generate --hide-outcome (0: none).
-  bool balance = false;         ///< generate --balance.
+  double frame_rate_hz = 0;            ///< 0: the scenario's own (generate --frame-rate).
+  int hide_outcome_frames = 0;         ///< generate --hide-outcome (0: none).
+  bool balance = false;                ///< generate --balance.
+  std::string mesh_density = "dense";  ///< generate --mesh-density ("dense" or "sparse").
 };
 
 struct TrainOptions {

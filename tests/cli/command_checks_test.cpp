@@ -252,6 +252,8 @@ TEST_F(CommandChecks, OptionsOutsideTheirRangeNameTheRange) {
   expect_refused("generate --scenario drop --count 0 --out " + path("gen"), {"count", "[1, "});
   expect_refused("generate --scenario drop --count 2 --jobs 100000 --out " + path("gen"),
                  {"jobs", "[1, 1024]"});
+  expect_refused("generate --scenario drop --count 2 --mesh-density coarse --out " + path("gen"),
+                 {"--mesh-density", "coarse", "dense", "sparse"});
 }
 
 }  // namespace

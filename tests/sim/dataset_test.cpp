@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "engine/core/error.h"
@@ -132,6 +133,30 @@ TEST(Dataset, CountAndJobsOutOfRangeNameTheRange) {
   }
 }
 
+// --mesh-density sparse is recorded in the manifest and stored in every scene file: boxes keep
+// their 8 corners and cylinders their rims, never the dense grids (98 and 226 vertices).
+TEST(Dataset, SparseMeshesAreStoredAndRecorded) {
+  TempDir dir("sparse");
+  DatasetOptions options;
+  options.scenario = "movi-a";
+  options.count = 4;
+  options.seed = 8;
+  options.out_dir = dir.str("out");
+  options.mesh_density = MeshDensity::kSparse;
+  const DatasetSummary summary = generate_dataset(options);
+  const nlohmann::json m = nlohmann::json::parse(read_text(summary.manifest_path));
+  EXPECT_EQ(m["parameters"]["mesh_density"], "sparse");
+  std::set<Eigen::Index> counts;
+  for (const DatasetEntry& e : summary.entries) {
+    for (const Object& o : read_scene(options.out_dir + "/" + e.file).objects) {
+      counts.insert(o.mesh.num_vertices());
+    }
+  }
+  EXPECT_TRUE(counts.count(8)) << "no sparse box among " << counts.size() << " mesh sizes";
+  EXPECT_FALSE(counts.count(98)) << "a dense box was stored";
+  EXPECT_FALSE(counts.count(226)) << "a dense cylinder was stored";
+}
+
 TEST(Dataset, WritesScenesAndManifest) {
   TempDir dir("manifest");
   DatasetOptions options;
@@ -147,6 +172,7 @@ TEST(Dataset, WritesScenesAndManifest) {
   EXPECT_EQ(m["seed"], 5);
   EXPECT_EQ(m["parameters"]["num_frames"], 60);
   EXPECT_EQ(m["parameters"]["frame_rate_hz"], 30.0);
+  EXPECT_EQ(m["parameters"]["mesh_density"], "dense");
   ASSERT_EQ(m["files"].size(), 10u);
   EXPECT_EQ(m["split"]["train"].size(), 8u);
   EXPECT_EQ(m["split"]["val"][0], "support_0008.h5");
@@ -275,6 +301,12 @@ TEST(Dataset, BadOptionsFailBeforeAnyWork) {
   o = options;
   o.scenario = "movi-c";
   EXPECT_NE(message(o).find("needs --meshes"), std::string::npos) << message(o);
+  o = options;
+  o.scenario = "movi-c";
+  o.meshes_dir = dir.str();
+  o.mesh_density = MeshDensity::kSparse;
+  EXPECT_NE(message(o).find("mesh_density: movi-c draws the given meshes"), std::string::npos)
+      << message(o);
   o = options;
   o.frame_rate_hz = 70;
   EXPECT_NE(message(o).find("frame_rate: 70 Hz does not divide"), std::string::npos) << message(o);

@@ -102,6 +102,40 @@ TEST(Scenarios, FrameRateStoresTheSameSimulationMoreDensely) {
   EXPECT_EQ(scenario_setup("collide", 7, fast).substeps_per_frame, 2);
 }
 
+// Sparse meshes change what is stored, not what is simulated: the same poses frame by frame, and
+// boxes and cylinders keep only the vertices their shapes need. Movi-c's user meshes stay as given.
+TEST(Scenarios, SparseMeshesStoreTheSameSimulation) {
+  for (const std::string& name : {std::string("movi-a"), std::string("support")}) {
+    const Scene dense = generate_scene(name, 11);
+    ScenarioOptions options;
+    options.mesh_density = MeshDensity::kSparse;
+    const Scene sparse = generate_scene(name, 11, options);
+    ASSERT_EQ(sparse.objects.size(), dense.objects.size()) << name;
+    ASSERT_EQ(sparse.num_frames(), dense.num_frames()) << name;
+    int fewer = 0;
+    for (size_t i = 0; i < dense.objects.size(); ++i) {
+      EXPECT_EQ(sparse.objects[i].mass, dense.objects[i].mass) << name << " object " << i;
+      EXPECT_LE(sparse.objects[i].mesh.num_vertices(), dense.objects[i].mesh.num_vertices());
+      fewer += sparse.objects[i].mesh.num_vertices() < dense.objects[i].mesh.num_vertices();
+      for (int f = 0; f < dense.num_frames(); ++f) {
+        const Pose &p = dense.trajectories[i].poses[f], &q = sparse.trajectories[i].poses[f];
+        ASSERT_EQ(p.position, q.position) << name << " object " << i << " frame " << f;
+        ASSERT_EQ(p.rotation.coeffs(), q.rotation.coeffs()) << name << " frame " << f;
+      }
+    }
+    EXPECT_GT(fewer, 0) << name << ": no box or cylinder got sparser";
+  }
+  ScenarioOptions options;
+  options.mesh_density = MeshDensity::kSparse;
+  options.meshes = {make_sphere_mesh(1.0, 6, 8)};
+  try {
+    scenario_setup("movi-c", 3, options);
+    ADD_FAILURE() << "sparse movi-c was accepted";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh_density"), std::string::npos) << e.what();
+  }
+}
+
 // 15 Hz would need 16 physics steps per frame, which 472 is not a multiple of.
 TEST(Scenarios, FrameRateThatDoesNotFitNamesTheRatesThatDo) {
   ScenarioOptions options;

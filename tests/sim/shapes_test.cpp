@@ -43,6 +43,65 @@ TEST(GridCylinderMesh, ClosedOutwardInscribed) {
   }
 }
 
+// Sparse meshes keep each primitive's shape with the fewest vertices: no vertex inside a flat
+// face, the same collision shape, so the same volume as the dense grid where that is exact.
+TEST(PartMesh, SparseKeepsTheShapeWithoutVerticesInsideFlatFaces) {
+  ShapePart box;
+  box.kind = ShapeKind::kBox;
+  box.half_extents = Vec3(0.5, 1.0, 1.5);
+  const Mesh dense_box = part_mesh(box), sparse_box = part_mesh(box, MeshDensity::kSparse);
+  EXPECT_EQ(dense_box.num_vertices(), 98);
+  ASSERT_EQ(sparse_box.num_vertices(), 8);
+  EXPECT_EQ(sparse_box.num_faces(), 12);
+  EXPECT_TRUE(is_closed_oriented(sparse_box));
+  EXPECT_NEAR(sparse_box.volume(), dense_box.volume(), 1e-12);
+  for (Eigen::Index i = 0; i < 8; ++i) {
+    EXPECT_NEAR((sparse_box.vertices.row(i).cwiseAbs().transpose() - box.half_extents).norm(), 0,
+                1e-12)
+        << "vertex " << i << " is not a corner";
+  }
+  ShapePart cylinder;
+  cylinder.kind = ShapeKind::kCylinder;
+  cylinder.half_extents = Vec3(0.3, 0.3, 0.7);
+  const Mesh dense_cyl = part_mesh(cylinder),
+             sparse_cyl = part_mesh(cylinder, MeshDensity::kSparse);
+  EXPECT_EQ(dense_cyl.num_vertices(), 226);
+  ASSERT_EQ(sparse_cyl.num_vertices(), 2 * kCylinderSegments + 2) << "two rims and two centres";
+  EXPECT_TRUE(is_closed_oriented(sparse_cyl));
+  EXPECT_NEAR(sparse_cyl.volume(), dense_cyl.volume(), 1e-12) << "the same inscribed prism";
+  for (Eigen::Index i = 0; i < sparse_cyl.num_vertices(); ++i) {
+    const double r = sparse_cyl.vertices.row(i).head<2>().norm();
+    EXPECT_TRUE(std::abs(r - 0.3) < 1e-12 || r < 1e-12) << "vertex " << i << " inside a cap";
+    EXPECT_NEAR(std::abs(sparse_cyl.vertices(i, 2)), 0.7, 1e-12) << "vertex " << i << " on a side";
+  }
+  ShapePart sphere;
+  sphere.kind = ShapeKind::kSphere;
+  sphere.half_extents = Vec3::Constant(0.4);
+  const Mesh dense_sphere = part_mesh(sphere);
+  EXPECT_EQ(dense_sphere.num_vertices(), 482);
+  EXPECT_EQ(part_mesh(sphere, MeshDensity::kSparse).vertices, dense_sphere.vertices)
+      << "a sphere has no flat faces: kept as it is";
+  // Parts stay placed in the body frame.
+  box.local.position = Vec3(1, 2, 3);
+  EXPECT_NEAR((body_mesh({box}, MeshDensity::kSparse).vertices.colwise().mean() -
+               Eigen::RowVector3d(1, 2, 3))
+                  .norm(),
+              0, 1e-12);
+}
+
+TEST(MeshDensityName, RoundTripsAndRejectsOtherNames) {
+  for (MeshDensity d : {MeshDensity::kDense, MeshDensity::kSparse}) {
+    EXPECT_EQ(parse_mesh_density(mesh_density_name(d), "x"), d);
+  }
+  try {
+    parse_mesh_density("coarse", "--mesh-density");
+    ADD_FAILURE() << "coarse was accepted";
+  } catch (const ValueError& e) {
+    EXPECT_NE(std::string(e.what()).find("--mesh-density"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("\"dense\" or \"sparse\""), std::string::npos) << e.what();
+  }
+}
+
 TEST(WedgeMesh, ClosedOutwardWithPrismVolume) {
   const Mesh m = make_wedge_mesh(0.8, 0.3, 0.2);
   EXPECT_TRUE(is_closed_oriented(m));

@@ -471,7 +471,8 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   o.pushforward_steps = 2;
   o.data_dirs.push_back("other");
   o.description = "a test recipe";
-  o.datasets = {{"data/drop", "drop", 10, 5, 0.0}, {"other", "collide", 20, 6, 60.0, 14, true}};
+  o.datasets = {{"data/drop", "drop", 10, 5, 0.0},
+                {"other", "collide", 20, 6, 60.0, 14, true, "sparse"}};
   o.notes_json = R"({"wall_time_s":12.5,"final":{"loss":0.1}})";
   const TrainOptions back = TrainOptions::from_json(o.to_json(), "recipe.json");
   EXPECT_EQ(back.to_json(), o.to_json());
@@ -487,6 +488,10 @@ TEST(TrainOptionsTest, RecipeRoundTripAndDefaultsByScale) {
   EXPECT_TRUE(back.datasets[1].balance);
   EXPECT_EQ(back.datasets[0].hide_outcome_frames, 0);
   EXPECT_FALSE(back.datasets[0].balance);
+  EXPECT_EQ(back.datasets[1].mesh_density, "sparse");
+  EXPECT_EQ(back.datasets[0].mesh_density, "dense");
+  EXPECT_EQ(o.to_json().find("mesh_density"), o.to_json().rfind("mesh_density"))
+      << "written only where it is not the default";
   EXPECT_EQ(o.to_json().find("hide_outcome_frames"), o.to_json().rfind("hide_outcome_frames"))
       << "written only where scenes are selected";
   EXPECT_EQ(o.to_json().find("frame_rate_hz"), o.to_json().rfind("frame_rate_hz"))
