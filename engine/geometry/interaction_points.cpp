@@ -22,7 +22,8 @@ struct ObjectSamples {
 };
 
 void check_inputs(const Points& vertices, const Faces& faces,
-                  const std::vector<int32_t>& face_object, double threshold, int lattice) {
+                  const std::vector<int32_t>& face_object, double threshold, int lattice,
+                  double spacing) {
   if (face_object.size() != static_cast<size_t>(faces.rows())) {
     throw ValueError("face_object", "has " + std::to_string(face_object.size()) + " entries for " +
                                         std::to_string(faces.rows()) + " faces");
@@ -34,6 +35,11 @@ void check_inputs(const Points& vertices, const Faces& faces,
     throw ValueError("lattice",
                      "must be >= 1 subdivision per edge, got " + std::to_string(lattice));
   }
+  if (!std::isfinite(spacing) || spacing < 0.0) {
+    throw ValueError("spacing",
+                     "must be finite and >= 0 (0: the same lattice on every face), got " +
+                         std::to_string(spacing));
+  }
   if (!vertices.allFinite()) throw ValueError("vertices", "contain a non-finite coordinate");
   const auto n = static_cast<int32_t>(vertices.rows());
   if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= n)) {
@@ -41,17 +47,37 @@ void check_inputs(const Points& vertices, const Faces& faces,
   }
 }
 
+// A face's subdivisions are capped: a face this much longer than the spacing is sampled as if it
+// were this long (it would otherwise ask for more samples than memory holds).
+constexpr int kMaxFaceLattice = 256;
+
 }  // namespace
+
+int face_lattice(double longest_edge, int lattice, double spacing) {
+  if (spacing <= 0.0 || !(longest_edge > lattice * spacing)) return lattice;
+  return static_cast<int>(std::min<double>(std::ceil(longest_edge / spacing), kMaxFaceLattice));
+}
 
 SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
                               const std::vector<int32_t>& face_object, double threshold,
-                              int lattice) {
-  check_inputs(vertices, faces, face_object, threshold, lattice);
+                              int lattice, double spacing) {
+  check_inputs(vertices, faces, face_object, threshold, lattice, spacing);
 
-  // Barycentric lattice (i, j, lattice - i - j) / lattice, corners and edges included, numbered
-  // face by face so that sample order follows face order.
-  const int per_face = (lattice + 1) * (lattice + 2) / 2;
-  const Eigen::Index total = faces.rows() * per_face;
+  // Barycentric lattice (i, j, n - i - j) / n of each face's n subdivisions, corners and edges
+  // included, numbered face by face so that sample order follows face order.
+  std::vector<int> subdivisions(static_cast<size_t>(faces.rows()), lattice);
+  Eigen::Index total = 0;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    int& n = subdivisions[static_cast<size_t>(f)];
+    if (spacing > 0.0) {
+      const Eigen::RowVector3d a = vertices.row(faces(f, 0));
+      const Eigen::RowVector3d b = vertices.row(faces(f, 1));
+      const Eigen::RowVector3d c = vertices.row(faces(f, 2));
+      n = face_lattice(std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()}), lattice,
+                       spacing);
+    }
+    total += (n + 1) * (n + 2) / 2;
+  }
   SamplePairs out;
   Points& samples = out.samples;
   std::vector<int32_t>& sample_face = out.sample_face;
@@ -62,10 +88,11 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
     const Eigen::RowVector3d a = vertices.row(faces(f, 0));
     const Eigen::RowVector3d b = vertices.row(faces(f, 1));
     const Eigen::RowVector3d c = vertices.row(faces(f, 2));
-    for (int i = 0; i <= lattice; ++i) {
-      for (int j = 0; j <= lattice - i; ++j) {
-        const int k = lattice - i - j;
-        samples.row(s) = (i * a + j * b + k * c) / lattice;
+    const int n = subdivisions[static_cast<size_t>(f)];
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n - i; ++j) {
+        const int k = n - i - j;
+        samples.row(s) = (i * a + j * b + k * c) / n;
         sample_face[static_cast<size_t>(s)] = static_cast<int32_t>(f);
         ++s;
       }
@@ -121,8 +148,8 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
 
 GroupedSamplePairs find_grouped_sample_pairs(const Points& vertices, const Faces& faces,
                                              const std::vector<int32_t>& face_object,
-                                             double threshold, int lattice) {
-  SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice);
+                                             double threshold, int lattice, double spacing) {
+  SamplePairs found = find_sample_pairs(vertices, faces, face_object, threshold, lattice, spacing);
   GroupedSamplePairs out;
   out.samples = std::move(found.samples);
   out.sample_face = std::move(found.sample_face);
@@ -167,9 +194,9 @@ GroupedSamplePairs find_grouped_sample_pairs(const Points& vertices, const Faces
 
 InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
                                           const std::vector<int32_t>& face_object, double threshold,
-                                          int lattice) {
+                                          int lattice, double spacing) {
   GroupedSamplePairs found =
-      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice);
+      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice, spacing);
   const Points& samples = found.samples;
   const std::vector<int32_t>& sample_face = found.sample_face;
   const auto n_pairs = static_cast<Eigen::Index>(found.pairs());

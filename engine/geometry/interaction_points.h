@@ -12,8 +12,8 @@ namespace dynscope {
 /// Close point pairs on faces of different objects. Pair p joins point_a[p] on face_a[p]
 /// (object object_a[p]) with point_b[p] on face_b[p]; each unordered pair is reported once with
 /// object_a < object_b. sample_a[p] and sample_b[p] number the two lattice samples (face by face,
-/// `(lattice+1)(lattice+2)/2` per face, so sample s lies on face s / that). `face_pairs` lists the
-/// distinct (face_a, face_b) pairs, ascending.
+/// `(n+1)(n+2)/2` per face of n subdivisions, face_lattice). `face_pairs` lists the distinct
+/// (face_a, face_b) pairs, ascending.
 struct InteractionPoints {
   Points point_a = Points(0, 3);
   Points point_b = Points(0, 3);
@@ -34,7 +34,12 @@ struct SamplePairs {
 };
 SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
                               const std::vector<int32_t>& face_object, double threshold,
-                              int lattice = 3);
+                              int lattice = 3, double spacing = 0.0);
+
+/// Subdivisions per edge of the lattice on a face whose longest edge is `longest_edge`: `lattice`,
+/// or with `spacing` > 0 as many more as keep the samples at most `spacing` apart along the edges
+/// (ceil(longest_edge / spacing)), so that a large face is sampled as densely as a small one.
+int face_lattice(double longest_edge, int lattice, double spacing);
 
 /// find_sample_pairs' pairs grouped by their first sample, kept compact: the partners of sample a
 /// are partner[start[a], start[a+1]), in no particular order. `face_pairs` lists the distinct
@@ -52,17 +57,19 @@ struct GroupedSamplePairs {
 };
 GroupedSamplePairs find_grouped_sample_pairs(const Points& vertices, const Faces& faces,
                                              const std::vector<int32_t>& face_object,
-                                             double threshold, int lattice = 3);
+                                             double threshold, int lattice = 3,
+                                             double spacing = 0.0);
 
-/// Samples points on every face (a barycentric lattice with `lattice` subdivisions per edge, i.e.
-/// (lattice+1)(lattice+2)/2 points, corners included), pairs samples of faces of different objects
-/// strictly closer than `threshold` and returns them, ordered by the sample on face_a, then the
-/// sample on face_b (samples numbered face by face). The lattice spacing must be small against
-/// `threshold` for touching faces to be found. `vertices` `[V,3]` are world positions, `faces`
-/// `[F,3]` index them, `face_object` `[F]` gives each face's object id. Throws ValueError on
-/// inconsistent sizes, a bad face index, a non-finite vertex, threshold <= 0 or lattice < 1.
+/// Samples points on every face (a barycentric lattice with n = face_lattice(longest edge,
+/// `lattice`, `spacing`) subdivisions per edge, i.e. (n+1)(n+2)/2 points, corners included), pairs
+/// samples of faces of different objects strictly closer than `threshold` and returns them, ordered
+/// by the sample on face_a, then the sample on face_b (samples numbered face by face). The lattice
+/// spacing must be small against `threshold` for touching faces to be found. `vertices` `[V,3]`
+/// are world positions, `faces` `[F,3]` index them, `face_object` `[F]` gives each face's object
+/// id. Throws ValueError on inconsistent sizes, a bad face index, a non-finite vertex, threshold
+/// <= 0, lattice < 1 or a negative or non-finite spacing.
 InteractionPoints find_interaction_points(const Points& vertices, const Faces& faces,
                                           const std::vector<int32_t>& face_object, double threshold,
-                                          int lattice = 3);
+                                          int lattice = 3, double spacing = 0.0);
 
 }  // namespace dynscope

@@ -25,6 +25,7 @@ HierarchyOptions HierarchyOptions::from_config(const ModelConfig& config) {
   o.relational_top_only = config.relational_top_only;
   o.interaction_threshold = config.interaction_threshold;
   o.interaction_lattice = config.interaction_lattice;
+  o.interaction_spacing = config.interaction_spacing;
   return o;
 }
 
@@ -214,7 +215,8 @@ Hierarchy build_mesh_hierarchy(const Points& vertices, const std::vector<int32_t
                                HierarchyCache* cache) {
   Hierarchy h = build_hierarchy(vertices, object_ids, options, cache);
   h.mesh = build_mesh_interaction(vertices, object_ids, faces, options.interaction_threshold,
-                                  options.interaction_lattice, options.k_relational);
+                                  options.interaction_lattice, options.k_relational,
+                                  options.interaction_spacing);
   h.has_mesh = true;
   return h;
 }

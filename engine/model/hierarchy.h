@@ -29,6 +29,7 @@ struct HierarchyOptions {
                                        ///< no relational units below it).
   double interaction_threshold = 0.1;  ///< Mesh input: interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: lattice samples per face edge.
+  double interaction_spacing = 0.0;    ///< Mesh input: > 0 samples longer faces more densely.
 
   /// Options matching a model configuration (object_centric is false for ModelKind::kFlat).
   static HierarchyOptions from_config(const ModelConfig& config);

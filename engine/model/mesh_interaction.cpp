@@ -56,7 +56,8 @@ NeighborList empty_list(Eigen::Index rows, Eigen::Index k) {
 
 MeshInteraction build_mesh_interaction(const Points& vertices,
                                        const std::vector<int32_t>& vertex_object_ids,
-                                       const Faces& faces, double threshold, int lattice, int k) {
+                                       const Faces& faces, double threshold, int lattice, int k,
+                                       double spacing) {
   if (static_cast<Eigen::Index>(vertex_object_ids.size()) != vertices.rows()) {
     throw ValueError("vertex_object_ids", "has " + std::to_string(vertex_object_ids.size()) +
                                               " entries for " + std::to_string(vertices.rows()) +
@@ -72,7 +73,7 @@ MeshInteraction build_mesh_interaction(const Points& vertices,
     face_object[static_cast<size_t>(f)] = vertex_object_ids[static_cast<size_t>(faces(f, 0))];
   }
   const GroupedSamplePairs sp =
-      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice);
+      find_grouped_sample_pairs(vertices, faces, face_object, threshold, lattice, spacing);
 
   MeshInteraction out;
   // The same lattice sample may pair with several others; it is one interaction point, numbered

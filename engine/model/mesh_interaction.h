@@ -26,11 +26,13 @@ struct MeshInteraction {
   Eigen::Index size() const { return points.rows(); }
 };
 
-/// Finds interaction points between faces of different objects closer than `threshold` (lattice
-/// samples per edge as in find_interaction_points) and builds the three lists. A face's object is
-/// its first vertex's id. Throws ValueError on inconsistent sizes or bad indices.
+/// Finds interaction points between faces of different objects closer than `threshold` (`lattice`
+/// samples per edge, more on faces longer than `spacing` allows when it is > 0, as in
+/// find_interaction_points) and builds the three lists. A face's object is its first vertex's id.
+/// Throws ValueError on inconsistent sizes or bad indices.
 MeshInteraction build_mesh_interaction(const Points& vertices,
                                        const std::vector<int32_t>& vertex_object_ids,
-                                       const Faces& faces, double threshold, int lattice, int k);
+                                       const Faces& faces, double threshold, int lattice, int k,
+                                       double spacing = 0.0);
 
 }  // namespace dynscope

@@ -99,6 +99,8 @@ void ModelConfig::validate() const {
   require(growth >= 1.0 && std::isfinite(growth), "growth", "must be >= 1");
   require(interaction_threshold > 0, "interaction_threshold", "must be > 0");
   require(interaction_lattice >= 1, "interaction_lattice", "must be >= 1");
+  require(interaction_spacing >= 0 && std::isfinite(interaction_spacing), "interaction_spacing",
+          "must be >= 0 (0: the same lattice on every face)");
   require(!(kind != ModelKind::kPointConv && input == InputMode::kMesh), "input",
           "mesh input (interaction-point relational path) is implemented for the pointconv "
           "model only");
@@ -125,6 +127,7 @@ std::string ModelConfig::to_json() const {
   j["layer_norm"] = layer_norm;
   j["interaction_threshold"] = interaction_threshold;
   j["interaction_lattice"] = interaction_lattice;
+  if (interaction_spacing > 0) j["interaction_spacing"] = interaction_spacing;
   if (hold_static) j["hold_static"] = true;
   if (relational_top_only) j["relational_top_only"] = true;
   return j.dump();
@@ -186,6 +189,7 @@ ModelConfig ModelConfig::from_json(const std::string& text, const std::string& s
   read_field(j, "layer_norm", source, c.layer_norm);
   read_field(j, "interaction_threshold", source, c.interaction_threshold);
   read_field(j, "interaction_lattice", source, c.interaction_lattice);
+  read_field(j, "interaction_spacing", source, c.interaction_spacing);
   read_field(j, "hold_static", source, c.hold_static);
   read_field(j, "relational_top_only", source, c.relational_top_only);
   try {

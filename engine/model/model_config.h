@@ -55,6 +55,10 @@ struct ModelConfig {
   bool layer_norm = true;      ///< LayerNorm inside every conv unit; false: no normalisation.
   double interaction_threshold = 0.1;  ///< Mesh input: face-to-face interaction distance.
   int interaction_lattice = 3;         ///< Mesh input: samples per face edge when pairing faces.
+  /// Mesh input: > 0 samples a face whose longest edge exceeds interaction_lattice × this with
+  /// more subdivisions, at most this far apart along its edges (the paper samples faces
+  /// uniformly; sparse meshes have large faces). 0: interaction_lattice on every face.
+  double interaction_spacing = 0.0;
   /// Relational units only at level 0 (the paper's U-Net for meshes, its supplement: no relational
   /// reasoning between downsampled objects); mesh input always is so. false: every level of a
   /// points model has one. With true, a points model on mesh vertices is the paper's mesh U-Net

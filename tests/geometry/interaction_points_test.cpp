@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <string>
 #include <tuple>
@@ -36,18 +37,25 @@ struct World {
 };
 
 // Reference: every lattice sample against every other, O(S²).
+// With `spacing` > 0 a face of longest edge L gets max(lattice, ceil(L / spacing)) subdivisions.
 std::vector<std::tuple<int32_t, int32_t, int32_t, int32_t>> brute_force(const World& w,
                                                                         double threshold,
-                                                                        int lattice) {
+                                                                        int lattice,
+                                                                        double spacing = 0.0) {
   std::vector<Eigen::RowVector3d> samples;
   std::vector<int32_t> face;
   for (Eigen::Index f = 0; f < w.faces.rows(); ++f) {
-    for (int i = 0; i <= lattice; ++i) {
-      for (int j = 0; j <= lattice - i; ++j) {
-        const int k = lattice - i - j;
-        samples.push_back((i * w.vertices.row(w.faces(f, 0)) + j * w.vertices.row(w.faces(f, 1)) +
-                           k * w.vertices.row(w.faces(f, 2))) /
-                          lattice);
+    const Eigen::RowVector3d a = w.vertices.row(w.faces(f, 0)), b = w.vertices.row(w.faces(f, 1)),
+                             c = w.vertices.row(w.faces(f, 2));
+    int n = lattice;
+    if (spacing > 0) {
+      const double longest = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
+      n = std::max(lattice, static_cast<int>(std::ceil(longest / spacing)));
+    }
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n - i; ++j) {
+        const int k = n - i - j;
+        samples.push_back((i * a + j * b + k * c) / n);
         face.push_back(static_cast<int32_t>(f));
       }
     }
@@ -64,6 +72,46 @@ std::vector<std::tuple<int32_t, int32_t, int32_t, int32_t>> brute_force(const Wo
   }
   std::sort(pairs.begin(), pairs.end());
   return pairs;
+}
+
+// A spacing subdivides large faces until their samples are at most that far apart along the
+// edges (the paper samples faces uniformly): two 8-vertex boxes of side 3, face to face 0.05
+// apart and shifted by half the coarse lattice's step, share no sample pair on the lattice of 3
+// subdivisions (its samples 0.7 apart) but pair all over their touching faces with the spacing.
+TEST(InteractionPointsTest, SpacingSamplesLargeFacesAsDenselyAsSmallOnes) {
+  EXPECT_EQ(face_lattice(1.0, 3, 0.0), 3);
+  EXPECT_EQ(face_lattice(1.0, 3, 0.5), 3) << "a small face keeps the lattice";
+  EXPECT_EQ(face_lattice(2.8, 3, 0.3), 10);
+  EXPECT_EQ(face_lattice(1e12, 3, 0.3), 256) << "capped";
+  World w;
+  w.add(make_box_mesh(Vec3(3, 3, 3)), Vec3::Zero(), 0);
+  w.add(make_box_mesh(Vec3(3, 3, 3)), Vec3(0.5, 0.5, 3.05), 1);
+  ASSERT_EQ(w.vertices.rows(), 16);
+  const double threshold = 0.2;
+  EXPECT_EQ(find_interaction_points(w.vertices, w.faces, w.face_object, threshold).size(), 0u);
+  const InteractionPoints ip =
+      find_interaction_points(w.vertices, w.faces, w.face_object, threshold, 3, 0.25);
+  const auto want = brute_force(w, threshold, 3, 0.25);
+  ASSERT_GT(want.size(), 100u);
+  ASSERT_EQ(ip.size(), want.size());
+  for (size_t p = 0; p < ip.size(); ++p) {
+    EXPECT_EQ(std::make_tuple(ip.sample_a[p], ip.sample_b[p], ip.face_a[p], ip.face_b[p]), want[p])
+        << "pair " << p;
+    // Every pair joins A's top (z = 1.5) to B's bottom (z = 1.55).
+    EXPECT_NEAR(ip.point_a(p, 2), 1.5, 1e-12);
+    EXPECT_NEAR(ip.point_b(p, 2), 1.55, 1e-12);
+  }
+  // Spacing 0 is the plain lattice; a negative or non-finite spacing is refused.
+  EXPECT_EQ(find_interaction_points(w.vertices, w.faces, w.face_object, 0.8, 3, 0.0).face_pairs,
+            find_interaction_points(w.vertices, w.faces, w.face_object, 0.8).face_pairs);
+  for (const double bad : {-0.1, std::nan("")}) {
+    try {
+      find_interaction_points(w.vertices, w.faces, w.face_object, threshold, 3, bad);
+      ADD_FAILURE() << "spacing " << bad << " was accepted";
+    } catch (const ValueError& e) {
+      EXPECT_NE(std::string(e.what()).find("spacing"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(InteractionPointsTest, TouchingCubesPairTheirTouchingSides) {

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +19,28 @@
 
 namespace dynscope {
 namespace {
+
+// Large faces touching between the samples of the plain lattice: only the spacing finds them, and
+// every vertex of the two touching faces then takes interaction points (layer 3).
+TEST(MeshInteractionTest, SpacingFindsLargeFacesTouching) {
+  Points vertices(16, 3);
+  const Mesh box = make_box_mesh(Vec3(3, 3, 3));
+  vertices.topRows(8) = box.vertices;
+  vertices.bottomRows(8) = box.vertices.rowwise() + Eigen::RowVector3d(0.5, 0.5, 3.05);
+  Faces faces(24, 3);
+  faces.topRows(12) = box.faces;
+  faces.bottomRows(12) = box.faces.array() + 8;
+  std::vector<int32_t> ids(16, 1);
+  std::fill(ids.begin() + 8, ids.end(), 2);
+  EXPECT_EQ(build_mesh_interaction(vertices, ids, faces, 0.2, 3, 8).size(), 0);
+  const MeshInteraction mi = build_mesh_interaction(vertices, ids, faces, 0.2, 3, 8, 0.25);
+  ASSERT_GT(mi.size(), 100);
+  for (Eigen::Index v = 0; v < 16; ++v) {
+    if (std::abs(vertices(v, 2) - 1.5) < 1e-12 || std::abs(vertices(v, 2) - 1.55) < 1e-12) {
+      EXPECT_GT(mi.vertex_points.valid_count(v), 0) << "vertex " << v << " of a touching face";
+    }
+  }
+}
 
 TEST(MeshInteractionTest, ListsFollowTheThreeLayerDefinition) {
   const auto m = testing::make_two_boxes(0.05);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/error.h"
+#include "engine/model/hierarchy.h"
 
 namespace dynscope {
 namespace {
@@ -66,6 +67,22 @@ TEST(ModelConfigTest, RelationalTopOnlyRoundTripsAndPicksTheLevels) {
   flat.kind = ModelKind::kFlat;
   EXPECT_FALSE(flat.has_relational(0));
   EXPECT_THROW(ModelConfig::from_json(R"({"relational_top_only": 1})"), FormatError);
+}
+
+// interaction_spacing round-trips, is omitted when off (older checkpoints read as 0) and must be
+// a finite non-negative length.
+TEST(ModelConfigTest, InteractionSpacingRoundTripsAndIsChecked) {
+  ModelConfig c = ModelConfig::preset("kubric");
+  c.input = InputMode::kMesh;
+  EXPECT_EQ(c.to_json().find("interaction_spacing"), std::string::npos);
+  EXPECT_EQ(ModelConfig::from_json(c.to_json()).interaction_spacing, 0.0);
+  c.interaction_spacing = 0.3;
+  const ModelConfig d = ModelConfig::from_json(c.to_json());
+  EXPECT_EQ(d.interaction_spacing, 0.3);
+  EXPECT_EQ(d.to_json(), c.to_json());
+  EXPECT_EQ(HierarchyOptions::from_config(d).interaction_spacing, 0.3);
+  EXPECT_THROW(ModelConfig::from_json(R"({"interaction_spacing": -0.1})"), FormatError);
+  EXPECT_THROW(ModelConfig::from_json(R"({"interaction_spacing": "fine"})"), FormatError);
 }
 
 TEST(ModelConfigTest, PaperScalesGrowByOnePointFive) {
