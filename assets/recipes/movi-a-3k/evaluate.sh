@@ -7,7 +7,9 @@
 # still training are skipped. Then `dynscope compare` prints every variant's end error as mean ±
 # sd over the seeds evaluated so far, and the paired per-scene comparisons behind the paper's
 # claims, into out/campaign/compare.SPLIT.{txt,json}; the same for the runs at the paper's size
-# (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/.
+# (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/, and for the mesh runs on
+# sparse meshes (data/movi-a-3k-sparse: the same scenes, boxes and cylinders stored with the fewest
+# vertices) into out/campaign-sparse/.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
@@ -28,3 +30,8 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
    pointconv_acc_c32l4 gnn_acc_c32l4 flat_acc_c32l4 pointconv_vel_c32l4
    mesh_faces_on_c32l4 mesh_faces_on_t06_c32l4 mesh_faces_off_c32l4" \
   --data data/movi-a-3k --split "$split"
+# Faces on against off where faces are large (the same scenes with sparse meshes; faces on
+# samples them at most 0.3 apart).
+evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-sparse "$split" \
+  "mesh_faces_on_sparse_c32l4 mesh_faces_off_sparse_c32l4" \
+  --data data/movi-a-3k-sparse --split "$split"
