@@ -38,7 +38,8 @@ SamplePairs find_sample_pairs(const Points& vertices, const Faces& faces,
 
 /// Subdivisions per edge of the lattice on a face whose longest edge is `longest_edge`: `lattice`,
 /// or with `spacing` > 0 as many more as keep the samples at most `spacing` apart along the edges
-/// (ceil(longest_edge / spacing)), so that a large face is sampled as densely as a small one.
+/// (ceil(longest_edge / spacing), at most 256), so that a large face is sampled as densely as a
+/// small one.
 int face_lattice(double longest_edge, int lattice, double spacing);
 
 /// find_sample_pairs' pairs grouped by their first sample, kept compact: the partners of sample a
