@@ -33,7 +33,7 @@ struct TrainArgs {
       bottleneck = 0, stem = 0, k = 0, c_mid = 0, val_scenes = -1, val_frames = 0, pushforward = 0;
   int64_t max_steps = 0;
   double lr = 0, noise_std = -1, huber_delta = 0, voxel = 0, radius = 0, sample_voxel = 0;
-  uint64_t seed = 0;
+  uint64_t seed = 0, init_seed = 0;
   bool resume = false, keep_epochs = false, hold_static = false, relational_top_only = false;
   DistributedArgs dist;
   CLI::App* cmd = nullptr;
@@ -74,6 +74,7 @@ TrainOptions build_options(const TrainArgs& a) {
   if (given(a, "--huber-delta")) o.huber_delta = a.huber_delta;
   if (given(a, "--pushforward")) o.pushforward_steps = a.pushforward;
   if (given(a, "--seed")) o.seed = a.seed;
+  if (given(a, "--init-seed")) o.init_seed = a.init_seed;
   if (given(a, "--width")) o.model.width = a.width;
   if (given(a, "--levels")) o.model.levels = a.levels;
   if (given(a, "--bottleneck-blocks")) o.model.bottleneck_blocks = a.bottleneck;
@@ -252,7 +253,13 @@ void add_train_command(CLI::App& app) {
                 "among them later on a validation set");
   cmd->add_option("--checkpoint-every", a->checkpoint_every, "Save every N steps (default 200)");
   cmd->add_option("--max-steps", a->max_steps, "Stop after N steps in total (0: all epochs)");
-  cmd->add_option("--seed", a->seed, "Seed of initialisation, sampling and noise")
+  cmd->add_option("--seed", a->seed,
+                  "Seed of scene order, frames and noise, and of initialisation unless "
+                  "--init-seed")
+      ->check(unsigned_integer());
+  cmd->add_option("--init-seed", a->init_seed,
+                  "Seed of the initial weights alone (default: --seed), to tell what the "
+                  "initialisation does from what the scene order, frames and noise do")
       ->check(unsigned_integer());
   cmd->add_option("--width", a->width, "Base channel width C (default 32)");
   cmd->add_option("--levels", a->levels, "Hierarchy levels (default 4)");

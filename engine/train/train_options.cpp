@@ -20,7 +20,7 @@ namespace {
 // Largest value of an integer recipe field: seeds are uint64, max_steps and dataset counts int64,
 // every other integer field an `int`. No integer field of a recipe may be negative.
 double max_integer_field(const std::string& key) {
-  if (key == "seed") return 18446744073709551615.0;
+  if (key == "seed" || key == "init_seed") return 18446744073709551615.0;
   if (key == "max_steps" || key == "count") return 9223372036854775807.0;
   return std::numeric_limits<int32_t>::max();
 }
@@ -46,9 +46,9 @@ void check_numbers(const nlohmann::json& given, const nlohmann::json& reference,
     if (!ref.is_number_integer()) continue;
     const double hi = max_integer_field(it.key());
     if (v != std::floor(v) || v < 0 || v > hi) {
-      const std::string max = it.key() == "seed" ? "18446744073709551615"
-                              : hi > 3e9         ? "9223372036854775807"
-                                                 : "2147483647";
+      const std::string max = hi > 1e19  ? "18446744073709551615"
+                              : hi > 3e9 ? "9223372036854775807"
+                                         : "2147483647";
       throw FormatError(source, field,
                         "must be an integer in [0, " + max + "], got " + value.dump());
     }
@@ -105,6 +105,7 @@ std::string TrainOptions::to_json() const {
   j["val_frames"] = val_frames;
   j["threads"] = threads;
   j["seed"] = seed;
+  if (init_seed) j["init_seed"] = *init_seed;
   j["log"] = log_csv;
   j["keep_epochs"] = keep_epochs;
   if (!notes_json.empty()) j["notes"] = nlohmann::json::parse(notes_json);
@@ -121,7 +122,9 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     throw FormatError(source, "recipe", std::string("malformed JSON: ") + e.what());
   }
   if (!j.is_object()) throw FormatError(source, "recipe", "expected a JSON object");
-  check_numbers(j, nlohmann::json::parse(TrainOptions().to_json()), source, "");
+  nlohmann::json reference = nlohmann::json::parse(TrainOptions().to_json());
+  reference["init_seed"] = uint64_t{0};  // written only when set
+  check_numbers(j, reference, source, "");
   if (j.contains("datasets") && j.at("datasets").is_array()) {
     const nlohmann::json entry = {{"count", int64_t{1}},
                                   {"seed", uint64_t{0}},
@@ -212,6 +215,8 @@ TrainOptions TrainOptions::from_json(const std::string& text, const std::string&
     get("val_frames", o.val_frames);
     get("threads", o.threads);
     get("seed", o.seed);
+    field = "init_seed";
+    if (j.contains("init_seed")) o.init_seed = j.at("init_seed").get<uint64_t>();
     get("log", o.log_csv);
   } catch (const nlohmann::json::exception& e) {
     throw FormatError(source, field, std::string("wrong type: ") + e.what());

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,10 +75,13 @@ struct TrainOptions {
   int val_scenes = 4;          ///< Validation scenes used for the loss and the short rollout.
   int val_frames = 8;          ///< Frames of the validation rollout (observed ones included).
   int threads = 0;             ///< torch::set_num_threads (0: LibTorch's default).
-  uint64_t seed = 0;           ///< Seeds initialisation, scene order, frames and noise.
-  std::string log_csv;         ///< Per-step CSV log ("" = none).
-  bool keep_epochs = false;    ///< Also keep every epoch's checkpoint (epoch_checkpoint_path).
-  bool resume = false;         ///< Continue from `out` and its .state file.
+  uint64_t seed = 0;  ///< Seeds scene order, frames, noise, and initialisation unless init_seed.
+  /// Seeds the initial weights alone when set, so two runs can share their data draws (scene
+  /// order, frames, noise: `seed`) and differ only in initialisation, or the reverse.
+  std::optional<uint64_t> init_seed;
+  std::string log_csv;       ///< Per-step CSV log ("" = none).
+  bool keep_epochs = false;  ///< Also keep every epoch's checkpoint (epoch_checkpoint_path).
+  bool resume = false;       ///< Continue from `out` and its .state file.
 
   /// JSON object with every field (the recipe file format).
   std::string to_json() const;

@@ -298,7 +298,7 @@ TrainResult run(TrainOptions o, bool show_progress, ProcessGroup* group) {
   // on timing.
   static std::mutex init_mutex;
   std::unique_lock<std::mutex> init_lock(init_mutex);
-  torch::manual_seed(o.seed);
+  torch::manual_seed(o.init_seed.value_or(o.seed));
   DynamicsModel model(o.model);
   init_lock.unlock();
   const std::string config_json = model->config().to_json();

@@ -45,6 +45,9 @@ TEST(TrainOptions, IntegerFieldsRefuseFractionsSignsAndOverflow) {
   expect_has(parse_error(R"({"seed": -1})"),
              "seed: must be an integer in [0, 18446744073709551615]");
   expect_has(parse_error(R"({"sampling": {"seed": -3}})"), "sampling.seed");
+  expect_has(parse_error(R"({"init_seed": -2})"),
+             "init_seed: must be an integer in [0, 18446744073709551615]");
+  expect_has(parse_error(R"({"init_seed": "one"})"), "init_seed: wrong type");
   expect_has(parse_error(R"({"batch": 4294967297})"), "batch: must be an integer");
   expect_has(parse_error(R"({"pushforward_steps": -1})"), "pushforward_steps: must be an integer");
   expect_has(parse_error(R"({"datasets": [{"out": "d", "scenario": "drop", "count": 1.5}]})"),
@@ -53,6 +56,24 @@ TEST(TrainOptions, IntegerFieldsRefuseFractionsSignsAndOverflow) {
   // Integral values written as floats are fine, and so are float fields.
   EXPECT_EQ(parse_error(R"({"model_config": {"levels": 3.0}, "lr": 0.001, "max_steps": 5})"), "");
   EXPECT_EQ(TrainOptions::from_json(R"({"model_config": {"levels": 3.0}})", "r").model.levels, 3);
+}
+
+// The initialisation seed is written only when set (recipes without it keep their text), and
+// round-trips up to the largest seed.
+TEST(TrainOptions, InitSeedIsOptionalAndRoundTrips) {
+  TrainOptions o;
+  EXPECT_FALSE(o.init_seed.has_value());
+  EXPECT_EQ(o.to_json().find("init_seed"), std::string::npos);
+  EXPECT_FALSE(TrainOptions::from_json(o.to_json(), "r.json").init_seed.has_value());
+  o.init_seed = 18446744073709551615ull;
+  const TrainOptions back = TrainOptions::from_json(o.to_json(), "r.json");
+  ASSERT_TRUE(back.init_seed.has_value());
+  EXPECT_EQ(*back.init_seed, 18446744073709551615ull);
+  EXPECT_EQ(back.to_json(), o.to_json());
+  TrainOptions base;
+  base.init_seed = 4;
+  EXPECT_EQ(TrainOptions::from_json(R"({"seed": 9})", "r.json", base).init_seed, 4u)
+      << "a recipe without the field keeps the base's";
 }
 
 TEST(TrainOptions, ResolveRefusesValuesOutsideTheirRange) {
