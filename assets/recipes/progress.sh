@@ -21,10 +21,22 @@ run_finished() {
 # evaluated once into OUT/NAME.SPLIT.json (`$dynscope eval --checkpoint BEST EVAL_ARG ... --threads
 # 1`; again only when the checkpoint is newer); runs still training are reported and skipped.
 # Then `$dynscope compare` over the variants' seeds, into OUT/compare.SPLIT.{txt,json}.
+# DYNSCOPE_CAMPAIGN_EPOCH=last reads each run's last epoch (RUNS/NAME.pt) instead of its best, into
+# OUT/NAME.last.SPLIT.json and OUT/compare.last.SPLIT.{txt,json}: the same runs without the choice
+# of the epoch on validation.
 evaluate_and_compare() {
   local recipes=$1 runs=$2 out=$3 split=$4 variants=$5
   shift 5
-  local groups=() files variant recipe name ckpt best json
+  local groups=() files variant recipe name ckpt chosen json
+  local epoch=${DYNSCOPE_CAMPAIGN_EPOCH:-best} tag
+  case $epoch in
+    best) tag=$split ;;
+    last) tag=last.$split ;;
+    *)
+      echo "DYNSCOPE_CAMPAIGN_EPOCH must be best or last, not '$epoch'" >&2
+      return 2
+      ;;
+  esac
   mkdir -p "$out"
   for variant in $variants; do
     files=()
@@ -37,12 +49,13 @@ evaluate_and_compare() {
         echo "$name: still training ($(run_progress "$ckpt" | sed 's/ / of /') steps), skipped"
         continue
       fi
-      best=$runs/$name.best.pt
-      json=$out/$name.$split.json
-      if [ ! -f "$json" ] || [ "$best" -nt "$json" ]; then
-        echo "$name: evaluating $best on the $split split"
-        "$dynscope" eval --checkpoint "$best" "$@" --threads 1 --json "$json" \
-          > "$out/$name.$split.txt"
+      chosen=$runs/$name.best.pt
+      [ "$epoch" = last ] && chosen=$ckpt
+      json=$out/$name.$tag.json
+      if [ ! -f "$json" ] || [ "$chosen" -nt "$json" ]; then
+        echo "$name: evaluating $chosen on the $split split"
+        "$dynscope" eval --checkpoint "$chosen" "$@" --threads 1 --json "$json" \
+          > "$out/$name.$tag.txt"
       fi
       files+=("$json")
     done
@@ -54,5 +67,5 @@ evaluate_and_compare() {
     echo "no finished run to compare"
     return 0
   fi
-  "$dynscope" compare "${groups[@]}" --json "$out/compare.$split.json" | tee "$out/compare.$split.txt"
+  "$dynscope" compare "${groups[@]}" --json "$out/compare.$tag.json" | tee "$out/compare.$tag.txt"
 }

@@ -115,8 +115,8 @@ void write_progress(const fs::path& checkpoint, int steps, int total) {
 
 class PhysionEvaluateScript : public CampaignScript {
  protected:
-  test::CommandResult evaluate(const std::string& split) const {
-    return run_shell("DYNSCOPE=" + recorder_.string() +
+  test::CommandResult evaluate(const std::string& split, const std::string& env = "") const {
+    return run_shell(env + "DYNSCOPE=" + recorder_.string() +
                      " DYNSCOPE_CAMPAIGN_RUNS=" + (dir_ / "runs").string() +
                      " DYNSCOPE_CAMPAIGN_DATA=" + (dir_ / "data").string() +
                      " DYNSCOPE_CAMPAIGN_OUT=" + (dir_ / "out").string() + " bash " +
@@ -214,6 +214,40 @@ TEST_F(PhysionEvaluateScript, EvaluatesTheValidationSplitOfTheCampaignsData) {
   EXPECT_NE(c.find("compare paper=" + (dir_ / "out").string() + "/paper_s1.val.json"),
             std::string::npos)
       << c;
+}
+
+// DYNSCOPE_CAMPAIGN_EPOCH=last (movi-a's `evaluate.sh SPLIT last`): the same finished runs, read at
+// their last epoch (NAME.pt) into files of their own, so that both readings sit side by side.
+TEST_F(PhysionEvaluateScript, ReadsTheLastEpochsIntoFilesOfTheirOwnWhenAsked) {
+  fs::create_directories(dir_ / "runs");
+  write_progress(dir_ / "runs" / "centred_s1.pt", 10, 10);
+  write_progress(dir_ / "runs" / "paper_s3.pt", 5, 10);
+  const std::string out = (dir_ / "out").string();
+  fs::create_directories(out);
+  write_file(out + "/centred_s1.test.json", "{}");  // the best epoch's reading, already made
+  const auto result = evaluate("test", "DYNSCOPE_CAMPAIGN_EPOCH=last ");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string c = calls();
+  EXPECT_NE(c.find("eval --checkpoint " + (dir_ / "runs").string() + "/centred_s1.pt --data"),
+            std::string::npos)
+      << c;
+  EXPECT_NE(c.find(" --threads 1 --json " + out + "/centred_s1.last.test.json\n"),
+            std::string::npos)
+      << c;
+  EXPECT_EQ(c.find(".best.pt"), std::string::npos) << c;
+  EXPECT_EQ(c.find("paper_s3"), std::string::npos) << "a run still training is not read: " << c;
+  EXPECT_NE(c.find("compare centred=" + out + "/centred_s1.last.test.json --json " + out +
+                   "/compare.last.test.json\n"),
+            std::string::npos)
+      << c;
+  EXPECT_TRUE(fs::exists(out + "/centred_s1.last.test.txt"));
+
+  const auto bad = evaluate("test", "DYNSCOPE_CAMPAIGN_EPOCH=middle ");
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_NE(bad.output.find("DYNSCOPE_CAMPAIGN_EPOCH must be best or last, not 'middle'"),
+            std::string::npos)
+      << bad.output;
+  EXPECT_EQ(calls().find("eval --checkpoint", c.size()), std::string::npos) << "nothing more read";
 }
 
 }  // namespace

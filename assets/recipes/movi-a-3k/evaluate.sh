@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Evaluates the finished runs of the movi-a reproduction campaign on its test split and compares
 # them over seeds:
-#   assets/recipes/movi-a-3k/evaluate.sh [SPLIT]      (default: test)
+#   assets/recipes/movi-a-3k/evaluate.sh [SPLIT] [best|last]      (defaults: test, best)
 # Each finished run's best-epoch checkpoint (chosen on the validation split during training) is
-# evaluated once into out/campaign/NAME.SPLIT.json (again only when the checkpoint is newer); runs
-# still training are skipped. Then `dynscope compare` prints every variant's end error as mean ±
-# sd over the seeds evaluated so far, and the paired per-scene comparisons behind the paper's
-# claims, into out/campaign/compare.SPLIT.{txt,json}; the same for the runs at the paper's size
+# evaluated once into out/campaign/NAME.SPLIT.json (again only when the checkpoint is newer); with
+# `last`, its last epoch's checkpoint instead, into NAME.last.SPLIT.json and compare.last.SPLIT.*
+# (the same runs without the epoch choice, to see which claims depend on it); runs still training
+# are skipped. Then `dynscope compare` prints every variant's end error as mean ± sd over the
+# seeds evaluated so far, and the paired per-scene comparisons behind the paper's claims, into
+# out/campaign/compare.SPLIT.{txt,json}; the same for the runs at the paper's size
 # (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/, and for the mesh runs on
 # sparse meshes (data/movi-a-3k-sparse: the same scenes, boxes and cylinders stored with the fewest
 # vertices) into out/campaign-sparse/.
@@ -15,6 +17,7 @@ cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
 source assets/recipes/progress.sh
 split=${1:-test}
+export DYNSCOPE_CAMPAIGN_EPOCH=${2:-best}
 # In the order of the claims: PointConv < GNN U-Net < non-object-centric; acc < vel; faces on < off.
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign "$split" \
   "pointconv_acc gnn_acc flat_acc pointconv_vel mesh_faces_on mesh_faces_off" \
