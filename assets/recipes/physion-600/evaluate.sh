@@ -19,7 +19,8 @@
 # out/campaign-physion/compare.SPLIT.{txt,json}.
 # DYNSCOPE, DYNSCOPE_CAMPAIGN_RUNS, DYNSCOPE_CAMPAIGN_DATA and DYNSCOPE_CAMPAIGN_OUT replace the
 # program (build/bin/dynscope), the checkpoints' folder (assets/runs/physion-600), the data's
-# root (data) and the output folder (out/campaign-physion).
+# root (data) and the output folder (out/campaign-physion). DYNSCOPE_CAMPAIGN_EPOCH=last reads each
+# run's last epoch instead of its best (NAME.last.SPLIT.json, compare.last.SPLIT.*).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
