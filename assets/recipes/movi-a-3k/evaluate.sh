@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Evaluates the finished runs of the movi-a reproduction campaign on its test split and compares
 # them over seeds:
-#   assets/recipes/movi-a-3k/evaluate.sh [SPLIT] [best|last]      (defaults: test, best)
+#   assets/recipes/movi-a-3k/evaluate.sh [val|test] [best|last]      (defaults: test, best)
 # Each finished run's best-epoch checkpoint (chosen on the validation split during training) is
 # evaluated once into out/campaign/NAME.SPLIT.json (again only when the checkpoint is newer); with
 # `last`, its last epoch's checkpoint instead, into NAME.last.SPLIT.json and compare.last.SPLIT.*
@@ -16,8 +16,21 @@ set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
 source assets/recipes/progress.sh
+case ${1:-test} in
+  -h | --help)
+    sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+    exit 0
+    ;;
+esac
 split=${1:-test}
 export DYNSCOPE_CAMPAIGN_EPOCH=${2:-best}
+case "$split $DYNSCOPE_CAMPAIGN_EPOCH" in
+  val\ best | val\ last | test\ best | test\ last) ;;
+  *)
+    echo "usage: $0 [val|test] [best|last]  (--help explains)" >&2
+    exit 2
+    ;;
+esac
 # In the order of the claims: PointConv < GNN U-Net < non-object-centric; acc < vel; faces on < off.
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign "$split" \
   "pointconv_acc gnn_acc flat_acc pointconv_vel mesh_faces_on mesh_faces_off" \
