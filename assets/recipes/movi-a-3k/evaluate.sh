@@ -11,7 +11,8 @@
 # out/campaign/compare.SPLIT.{txt,json}; the same for the runs at the paper's size
 # (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/, and for the mesh runs on
 # sparse meshes (data/movi-a-3k-sparse: the same scenes, boxes and cylinders stored with the fewest
-# vertices) into out/campaign-sparse/.
+# vertices) into out/campaign-sparse/, and for the runs trained on their own one-step predictions
+# (the *_pf1 recipes) beside the radius-0.9 PointConv runs into out/campaign-pf1/.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
@@ -51,3 +52,8 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-sparse "$split" \
   "mesh_faces_on_sparse_c32l4 mesh_faces_off_sparse_c32l4" \
   --data data/movi-a-3k-sparse --split "$split"
+# Trained on their own one-step predictions (pushforward, the *_pf1 recipes): the paper's size, each
+# U-Net as in the group above, beside the radius-0.9 PointConv runs trained without it.
+evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-pf1 "$split" \
+  "pointconv_acc_r09_pf1_c32l4 gnn_acc_r09_pf1_c32l4 flat_acc_pf1_c32l4 pointconv_acc_r09_c32l4" \
+  --data data/movi-a-3k --split "$split"
