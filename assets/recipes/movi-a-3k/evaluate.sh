@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Evaluates the finished runs of the movi-a reproduction campaign on its test split and compares
-# them over seeds:
+# Evaluates the finished runs of the movi-a reproduction campaign on its test (or validation) split
+# and compares them over seeds:
 #   assets/recipes/movi-a-3k/evaluate.sh [val|test] [best|last]      (defaults: test, best)
 # Each finished run's best-epoch checkpoint (chosen on the validation split during training) is
 # evaluated once into out/campaign/NAME.SPLIT.json (again only when the checkpoint is newer); with
