@@ -53,7 +53,9 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
   "mesh_faces_on_sparse_c32l4 mesh_faces_off_sparse_c32l4" \
   --data data/movi-a-3k-sparse --split "$split"
 # Trained on their own one-step predictions (pushforward, the *_pf1 recipes): the paper's size, each
-# U-Net as in the group above, beside the radius-0.9 PointConv runs trained without it.
+# U-Net and the velocity head as in the group above, beside the radius-0.9 PointConv runs trained
+# without it.
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-pf1 "$split" \
-  "pointconv_acc_r09_pf1_c32l4 gnn_acc_r09_pf1_c32l4 flat_acc_pf1_c32l4 pointconv_acc_r09_c32l4" \
+  "pointconv_acc_r09_pf1_c32l4 gnn_acc_r09_pf1_c32l4 flat_acc_pf1_c32l4 pointconv_vel_r09_pf1_c32l4
+   pointconv_acc_r09_c32l4" \
   --data data/movi-a-3k --split "$split"
