@@ -12,7 +12,7 @@
 # (C = 32, 4 levels: the *_c32l4_sN recipes) into out/campaign-c32l4/, and for the mesh runs on
 # sparse meshes (data/movi-a-3k-sparse: the same scenes, boxes and cylinders stored with the fewest
 # vertices) into out/campaign-sparse/, and for the runs trained on their own one-step predictions
-# (the *_pf1 recipes) beside the same U-Nets trained without it into out/campaign-pf1/.
+# (the *_pf1 recipes) beside the same runs trained without it into out/campaign-pf1/.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 dynscope=${DYNSCOPE:-build/bin/dynscope}
@@ -53,9 +53,9 @@ evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign
   "mesh_faces_on_sparse_c32l4 mesh_faces_off_sparse_c32l4" \
   --data data/movi-a-3k-sparse --split "$split"
 # Trained on their own one-step predictions (pushforward, the *_pf1 recipes): the paper's size, each
-# U-Net and the velocity head as in the group above, beside the same three U-Nets trained without
-# it (so that each pushforward run's gain over its plain recipe is paired per scene too).
+# U-Net and the velocity head as in the group above, beside the same runs trained without it (so
+# that each pushforward run's gain over its plain recipe is paired per scene too).
 evaluate_and_compare assets/recipes/movi-a-3k assets/runs/movi-a-3k out/campaign-pf1 "$split" \
   "pointconv_acc_r09_pf1_c32l4 gnn_acc_r09_pf1_c32l4 flat_acc_pf1_c32l4 pointconv_vel_r09_pf1_c32l4
-   pointconv_acc_r09_c32l4 gnn_acc_r09_c32l4 flat_acc_c32l4" \
+   pointconv_acc_r09_c32l4 gnn_acc_r09_c32l4 flat_acc_c32l4 pointconv_vel_r09_c32l4" \
   --data data/movi-a-3k --split "$split"
