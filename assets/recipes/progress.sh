@@ -15,18 +15,20 @@ run_finished() {
   read -r done_steps total_steps <<< "$(run_progress "$1")"
   [ -n "$done_steps" ] && [ "$done_steps" = "$total_steps" ]
 }
-# evaluate_and_compare RECIPES RUNS OUT SPLIT "VARIANT ..." EVAL_ARG ...
+# evaluate_and_compare RECIPES RUNS EVALS OUT SPLIT "VARIANT ..." EVAL_ARG ...
 # The campaigns' evaluation: for each variant (in the order of its claims), every recipe
 # RECIPES/VARIANT_sN.json whose run RUNS/NAME.pt has finished has its best-epoch checkpoint
-# evaluated once into OUT/NAME.SPLIT.json (`$dynscope eval --checkpoint BEST EVAL_ARG ... --threads
+# evaluated once into EVALS/NAME.SPLIT.json (`$dynscope eval --checkpoint BEST EVAL_ARG ... --threads
 # 1`; again only when the checkpoint is newer); runs still training are reported and skipped.
-# Then `$dynscope compare` over the variants' seeds, into OUT/compare.SPLIT.{txt,json}.
+# Then `$dynscope compare` over the variants' seeds, into OUT/compare.SPLIT.{txt,json}. EVALS holds
+# the evaluations of one data set under one protocol and may be shared by several groups (OUT), so
+# that a run compared in two groups is evaluated once.
 # DYNSCOPE_CAMPAIGN_EPOCH=last reads each run's last epoch (RUNS/NAME.pt) instead of its best, into
-# OUT/NAME.last.SPLIT.json and OUT/compare.last.SPLIT.{txt,json}: the same runs without the choice
+# EVALS/NAME.last.SPLIT.json and OUT/compare.last.SPLIT.{txt,json}: the same runs without the choice
 # of the epoch on validation.
 evaluate_and_compare() {
-  local recipes=$1 runs=$2 out=$3 split=$4 variants=$5
-  shift 5
+  local recipes=$1 runs=$2 evals=$3 out=$4 split=$5 variants=$6
+  shift 6
   local groups=() files variant recipe name ckpt chosen json
   local epoch=${DYNSCOPE_CAMPAIGN_EPOCH:-best} tag
   case $epoch in
@@ -37,7 +39,7 @@ evaluate_and_compare() {
       return 2
       ;;
   esac
-  mkdir -p "$out"
+  mkdir -p "$evals" "$out"
   for variant in $variants; do
     files=()
     for recipe in "$recipes/${variant}"_s[0-9].json; do
@@ -51,11 +53,11 @@ evaluate_and_compare() {
       fi
       chosen=$runs/$name.best.pt
       [ "$epoch" = last ] && chosen=$ckpt
-      json=$out/$name.$tag.json
+      json=$evals/$name.$tag.json
       if [ ! -f "$json" ] || [ "$chosen" -nt "$json" ]; then
         echo "$name: evaluating $chosen on the $split split"
         "$dynscope" eval --checkpoint "$chosen" "$@" --threads 1 --json "$json" \
-          > "$out/$name.$tag.txt"
+          > "$evals/$name.$tag.txt"
       fi
       files+=("$json")
     done

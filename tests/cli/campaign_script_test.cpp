@@ -3,8 +3,9 @@
 // start a new run, resume one with a training state, leave a finished one alone and refuse a
 // recipe without a checkpoint path. And of assets/recipes/physion-600/evaluate.sh, which
 // evaluates the Physion-like campaign's finished runs: held-out set generated when missing, only
-// finished runs evaluated, on the right scenes, then compared over seeds. `dynscope` is replaced
-// by a script that records its arguments.
+// finished runs evaluated, on the right scenes, then compared over seeds; and of
+// assets/recipes/movi-a-3k/evaluate.sh, whose groups share runs that must be evaluated once.
+// `dynscope` is replaced by a script that records its arguments.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -24,6 +25,8 @@ using test::run_shell;
 const std::string kScript = std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/run.sh";
 const std::string kPhysionEvaluate =
     std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/physion-600/evaluate.sh";
+const std::string kMoviEvaluate =
+    std::string(DYNSCOPE_SOURCE_DIR) + "/assets/recipes/movi-a-3k/evaluate.sh";
 const char* const kScenarios[] = {"drop",    "collide", "roll", "dominoes",
                                   "support", "contain", "link"};
 
@@ -40,7 +43,12 @@ class CampaignScript : public ::testing::Test {
     fs::create_directories(dir_);
     recorder_ = dir_ / "record_arguments.sh";
     calls_ = dir_ / "calls.txt";
-    write_file(recorder_, "#!/bin/sh\necho \"$@\" >> " + calls_.string() + "\n");
+    // Like the program, it writes the file a `--json` option names (so that a script that skips
+    // evaluations already made sees them).
+    write_file(recorder_, "#!/bin/sh\necho \"$@\" >> " + calls_.string() +
+                              "\nprev=\nfor a in \"$@\"; do\n"
+                              "  if [ \"$prev\" = --json ]; then echo '{}' > \"$a\"; fi\n"
+                              "  prev=$a\ndone\n");
     fs::permissions(recorder_, fs::perms::owner_all);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -248,6 +256,49 @@ TEST_F(PhysionEvaluateScript, ReadsTheLastEpochsIntoFilesOfTheirOwnWhenAsked) {
             std::string::npos)
       << bad.output;
   EXPECT_EQ(calls().find("eval --checkpoint", c.size()), std::string::npos) << "nothing more read";
+}
+
+// The movi-a campaign compares a plain run in two groups (the paper's size, and beside its
+// pushforward recipe): it is evaluated once, into the data set's folder, and both groups' compare
+// lines read that file; each group's comparison goes into its own folder.
+TEST_F(CampaignScript, MoviEvaluatesARunInTwoGroupsOnceAndComparesItInBoth) {
+  const fs::path runs = dir_ / "runs";
+  fs::create_directories(runs);
+  write_progress(runs / "pointconv_acc_r09_c32l4_s1.pt", 10, 10);
+  write_progress(runs / "pointconv_acc_r09_pf1_c32l4_s1.pt", 10, 10);
+  write_progress(runs / "gnn_acc_r09_pf1_c32l4_s2.pt", 5, 10);
+  write_progress(runs / "mesh_faces_on_sparse_c32l4_s1.pt", 10, 10);
+  const std::string out = (dir_ / "out").string();
+  const auto result =
+      run_shell("DYNSCOPE=" + recorder_.string() + " DYNSCOPE_CAMPAIGN_RUNS=" + runs.string() +
+                " DYNSCOPE_CAMPAIGN_OUT=" + out + " bash " + kMoviEvaluate + " test");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const std::string evals = out + "/campaign-evals/movi-a-3k";
+  const std::string sparse = out + "/campaign-evals/movi-a-3k-sparse";
+  const std::string plain = evals + "/pointconv_acc_r09_c32l4_s1.test.json";
+  const std::string pf1 = evals + "/pointconv_acc_r09_pf1_c32l4_s1.test.json";
+  const std::string faces = sparse + "/mesh_faces_on_sparse_c32l4_s1.test.json";
+  const std::string eval_tail = " --data data/movi-a-3k --split test --threads 1 --json ";
+  const std::string expected =
+      "eval --checkpoint " + runs.string() + "/pointconv_acc_r09_c32l4_s1.best.pt" + eval_tail +
+      plain + "\ncompare pointconv_acc_r09_c32l4=" + plain + " --json " + out +
+      "/campaign-c32l4/compare.test.json\n" +
+      "eval --checkpoint " + runs.string() + "/mesh_faces_on_sparse_c32l4_s1.best.pt" +
+      " --data data/movi-a-3k-sparse --split test --threads 1 --json " + faces +
+      "\ncompare mesh_faces_on_sparse_c32l4=" + faces + " --json " + out +
+      "/campaign-sparse/compare.test.json\n" +
+      "eval --checkpoint " + runs.string() + "/pointconv_acc_r09_pf1_c32l4_s1.best.pt" +
+      eval_tail + pf1 + "\ncompare pointconv_acc_r09_pf1_c32l4=" + pf1 +
+      " pointconv_acc_r09_c32l4=" + plain + " --json " + out + "/campaign-pf1/compare.test.json\n";
+  EXPECT_EQ(calls(), expected);
+  EXPECT_NE(result.output.find("gnn_acc_r09_pf1_c32l4_s2: still training (5 of 10 steps)"),
+            std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("no finished run to compare"), std::string::npos)
+      << "the first budget's group has none: " << result.output;
+  EXPECT_TRUE(fs::exists(evals + "/pointconv_acc_r09_c32l4_s1.test.txt"));
+  EXPECT_FALSE(fs::exists(out + "/campaign-pf1/pointconv_acc_r09_c32l4_s1.test.json"))
+      << "a group's folder holds its comparison only";
 }
 
 }  // namespace

@@ -76,7 +76,9 @@ esac
 data=()
 for s in "${scenarios[@]}"; do data+=(--data "$root/$s"); done
 # The shipped recipe's three seeds, the paper's architecture, the static-bodies-held variant, the
-# level-0 radius of 0.15 and the 60-epoch schedule.
+# level-0 radius of 0.15 and the 60-epoch schedule: one group, so its evaluations and its comparison
+# share one folder (the files' SPLIT keeps the three data sets apart).
+out=${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}
 evaluate_and_compare assets/recipes/physion-600 "${DYNSCOPE_CAMPAIGN_RUNS:-assets/runs/physion-600}" \
-  "${DYNSCOPE_CAMPAIGN_OUT:-out/campaign-physion}" "$split" "centred paper held radius15 long60" \
+  "$out" "$out" "$split" "centred paper held radius15 long60" \
   "${data[@]}" --split "$eval_split" "${protocol[@]}"
