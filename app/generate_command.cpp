@@ -67,9 +67,10 @@ void add_generate_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--frame-rate", args->frame_rate_hz,
                   "Stored frames per second (Hz), instead of the scenario's own: the same\n"
-                  "simulation over the same time, stored more or less densely (it must divide the\n"
-                  "240 Hz physics and the scenario's physics steps; e.g. 60 for the Physion-like\n"
-                  "scenes, stored at 30)");
+                  "simulation stored more or less densely (a whole number of the 240 Hz physics\n"
+                  "steps per frame; e.g. 60 or 15 for the Physion-like scenes, stored at 30); over\n"
+                  "the same time, or on to the next whole frame where the rate's interval does not\n"
+                  "divide the scenario's physics steps");
   cmd->add_option("--hide-outcome", args->hide_outcome_frames,
                   "Physion-like scenarios: draw a trial again while its target touches the zone\n"
                   "in its first N frames, so that a model observing N frames cannot read the\n"

@@ -38,14 +38,15 @@ void check_setup(const SimSetup& s) {
 void set_frame_rate(SimSetup& setup, double frame_rate_hz) {
   check_setup(setup);
   const int64_t steps = static_cast<int64_t>(setup.num_frames - 1) * setup.substeps_per_frame;
-  // The rates that fit: physics_rate / s for every s dividing the setup's physics steps.
+  // A frame must fall on a physics step: the rates that fit are physics_rate / s for whole s (the
+  // whole rates among them are listed). An interval that does not divide the run's steps runs the
+  // simulation on to the next whole frame.
   std::string fitting;
   int substeps = 0;
   for (int64_t s = 1; s <= std::max<int64_t>(steps, 1); ++s) {
-    if (steps % s != 0) continue;
     const double rate = setup.physics_rate_hz / static_cast<double>(s);
     if (std::abs(rate - frame_rate_hz) <= 1e-9 * rate) substeps = static_cast<int>(s);
-    if (rate == std::floor(rate)) {  // whole rates only: 240, 120, 60, 30 for 472 steps
+    if (rate == std::floor(rate)) {  // 240, 120, 80, 60, 48, ..., 1 for 240 Hz physics
       char text[32];
       std::snprintf(text, sizeof text, "%s%g", fitting.empty() ? "" : ", ", rate);
       fitting += text;
@@ -53,12 +54,12 @@ void set_frame_rate(SimSetup& setup, double frame_rate_hz) {
   }
   if (substeps == 0) {
     char text[96];
-    std::snprintf(text, sizeof text, "%g Hz does not divide the %g Hz physics over %lld steps",
-                  frame_rate_hz, setup.physics_rate_hz, static_cast<long long>(steps));
+    std::snprintf(text, sizeof text, "%g Hz is not a whole number of %g Hz physics steps",
+                  frame_rate_hz, setup.physics_rate_hz);
     throw ValueError("frame_rate", std::string(text) + " (rates that fit: " + fitting + ")");
   }
   setup.substeps_per_frame = substeps;
-  setup.num_frames = static_cast<int>(steps / substeps) + 1;
+  setup.num_frames = static_cast<int>((steps + substeps - 1) / substeps) + 1;
 }
 
 Scene simulate(const SimSetup& setup) {

@@ -57,11 +57,13 @@ struct SimSetup {
   double frame_dt_s() const { return substeps_per_frame / physics_rate_hz; }
 };
 
-/// Stores `setup`'s frames at `frame_rate_hz` instead, over the same simulated time and with the
-/// same physics steps: substeps_per_frame becomes physics_rate_hz / frame_rate_hz and num_frames
-/// grows or shrinks so that the last frame stays at the same time. The rate must divide the
-/// physics rate and the setup's physics steps (a scene at twice the rate is the same scene with
-/// one more frame between every two). Throws ValueError("frame_rate") naming the rates that fit.
+/// Stores `setup`'s frames at `frame_rate_hz` instead, with the same physics steps:
+/// substeps_per_frame becomes physics_rate_hz / frame_rate_hz and num_frames grows or shrinks so
+/// that the last frame stays at the same time when the new interval divides the setup's physics
+/// steps (a scene at twice the rate is the same scene with one more frame between every two), and
+/// comes at the first frame after it otherwise (the simulation runs on by less than one interval;
+/// a scene at a third of the rate holds every third frame of its twin). The rate must be a whole
+/// number of physics steps. Throws ValueError("frame_rate") naming rates that fit.
 void set_frame_rate(SimSetup& setup, double frame_rate_hz);
 
 /// Rolls out `setup` with Bullet and records every body's pose at each stored frame. When one

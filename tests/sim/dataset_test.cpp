@@ -309,7 +309,7 @@ TEST(Dataset, BadOptionsFailBeforeAnyWork) {
       << message(o);
   o = options;
   o.frame_rate_hz = 70;
-  EXPECT_NE(message(o).find("frame_rate: 70 Hz does not divide"), std::string::npos) << message(o);
+  EXPECT_NE(message(o).find("frame_rate: 70 Hz is not a whole number"), std::string::npos) << message(o);
   o.frame_rate_hz = -1;
   EXPECT_NE(message(o).find("frame_rate: must be a positive rate"), std::string::npos)
       << message(o);

@@ -102,6 +102,45 @@ TEST(Scenarios, FrameRateStoresTheSameSimulationMoreDensely) {
   EXPECT_EQ(scenario_setup("collide", 7, fast).substeps_per_frame, 2);
 }
 
+// A lower rate whose interval does not divide the run: every third frame of the 30 Hz twin at 10 Hz,
+// and the simulation runs on to the next whole frame (collide's 472 physics steps are 19 intervals
+// of 24 and 16 steps, so a 20th interval ends 8 steps after the twin's last frame).
+TEST(Scenarios, FrameRateBelowTheRunsDivisorsRunsOnToTheNextWholeFrame) {
+  for (const std::string& name : {std::string("collide"), std::string("roll")}) {
+    const Scene own = generate_scene(name, 7);
+    ScenarioOptions options;
+    options.frame_rate_hz = 10.0;
+    const Scene slow = generate_scene(name, 7, options);
+    const int whole = (own.num_frames() - 1) / 3;  // the twin's frames that fall on this rate's
+    ASSERT_EQ(slow.num_frames(), whole + 2) << name;
+    EXPECT_DOUBLE_EQ(slow.dt_s, 3 * own.dt_s) << name;
+    ASSERT_EQ(slow.objects.size(), own.objects.size());
+    for (size_t i = 0; i < own.objects.size(); ++i) {
+      for (int f = 0; f <= whole; ++f) {
+        const Pose &p = own.trajectories[i].poses[3 * f], &q = slow.trajectories[i].poses[f];
+        ASSERT_EQ(p.position, q.position) << name << " object " << i << " frame " << f;
+        ASSERT_EQ(p.rotation.coeffs(), q.rotation.coeffs()) << name << " frame " << f;
+      }
+    }
+    const std::vector<double>& twin = own.labels.at(kContactLabel);
+    const std::vector<double>& coarse = slow.labels.at(kContactLabel);
+    EXPECT_EQ(coarse[0], twin[0]) << name;
+    for (int f = 1; f <= whole; ++f) {
+      EXPECT_EQ(coarse[f], std::max({twin[3 * f - 2], twin[3 * f - 1], twin[3 * f]}))
+          << name << " frame " << f;
+    }
+    // The last interval covers the twin's remaining frames and runs on past them.
+    double rest = 0;
+    for (int f = 3 * whole + 1; f < own.num_frames(); ++f) rest = std::max(rest, twin[f]);
+    EXPECT_GE(coarse[whole + 1], rest) << name;
+    EXPECT_GE(contact_outcome(slow), contact_outcome(own)) << name;
+  }
+  ScenarioOptions fifteen;
+  fifteen.frame_rate_hz = 15.0;  // 16 steps: 472 = 29 × 16 + 8
+  EXPECT_EQ(scenario_setup("collide", 7, fifteen).num_frames, 31);
+  EXPECT_EQ(scenario_setup("collide", 7, fifteen).substeps_per_frame, 16);
+}
+
 // Sparse meshes change what is stored, not what is simulated: the same poses frame by frame, and
 // boxes and cylinders keep only the vertices their shapes need. Movi-c's user meshes stay as given.
 TEST(Scenarios, SparseMeshesStoreTheSameSimulation) {
@@ -136,10 +175,10 @@ TEST(Scenarios, SparseMeshesStoreTheSameSimulation) {
   }
 }
 
-// 15 Hz would need 16 physics steps per frame, which 472 is not a multiple of.
+// A frame must fall on a physics step: 70 Hz would be 3.43 of the 240 Hz steps per frame.
 TEST(Scenarios, FrameRateThatDoesNotFitNamesTheRatesThatDo) {
   ScenarioOptions options;
-  for (const double bad : {70.0, 45.0, 15.0, 480.0, -30.0}) {
+  for (const double bad : {70.0, 45.0, 7.0, 480.0, -30.0}) {
     options.frame_rate_hz = bad;
     try {
       scenario_setup("collide", 7, options);
@@ -147,7 +186,10 @@ TEST(Scenarios, FrameRateThatDoesNotFitNamesTheRatesThatDo) {
     } catch (const ValueError& e) {
       const std::string message = e.what();
       EXPECT_NE(message.find("frame_rate"), std::string::npos) << message;
-      EXPECT_NE(message.find("rates that fit: 240, 120, 60, 30)"), std::string::npos) << message;
+      EXPECT_NE(message.find("rates that fit: 240, 120, 80, 60, 48, 40, 30, 24, 20, 16, 15, 12, 10, "
+                             "8, 6, 5, 4, 3, 2, 1)"),
+                std::string::npos)
+          << message;
     }
   }
 }
