@@ -13,3 +13,17 @@
 #else
 #define DYNSCOPE_ISA_CLONES
 #endif
+
+namespace dynscope {
+
+/// The x86-64 level whose clones this CPU runs: "x86-64-v4" (AVX-512), "x86-64-v3" (AVX2+FMA) or
+/// "baseline", by the same load-time dispatch as DYNSCOPE_ISA_CLONES.
+const char* isa_level();
+
+/// Whether this CPU's clones have 32 vector registers of 64 bytes (x86-64-v4). A clone's kernels
+/// that keep blocks of 16-float or 8-double vectors in registers do so only there: with 16
+/// registers of 32 bytes (AVX2) or 16 bytes such a vector takes two or four, and GCC moves arrays
+/// of them through memory at every operation, so those kernels use narrower blocks instead.
+bool wide_vector_registers();
+
+}  // namespace dynscope

@@ -48,19 +48,33 @@ size_t small_set_knn(const double* xyz, size_t n, const Vec3& query, size_t k, d
   return rank_by_position(d.data(), nullptr, n, k, max_sq_dist, out);
 }
 
-DYNSCOPE_ISA_CLONES
-void small_set_knn_batch(const double* xyz, size_t n, const double* queries, size_t m, size_t k,
-                         Neighbor* out) {
-  // One lane per query; the clones map a vector to one AVX-512 register, two AVX2 or four SSE2.
-  using Doubles = double __attribute__((vector_size(8 * kSmallSetBatch)));
-  using Counts = int64_t __attribute__((vector_size(8 * kSmallSetBatch)));
-  n = std::min(n, kSmallSetSize);
-  m = std::min(m, kSmallSetBatch);
-  k = std::min(k, n);
-  if (m == 0 || k == 0) return;
+namespace {
+
+// Vectors of kLanes doubles and of as many counts (an attribute's size cannot depend on a
+// template argument, hence one specialisation per width).
+template <size_t kLanes>
+struct LaneVectors;
+template <>
+struct LaneVectors<8> {
+  typedef double Doubles __attribute__((vector_size(64)));
+  typedef int64_t Counts __attribute__((vector_size(64)));
+};
+template <>
+struct LaneVectors<4> {
+  typedef double Doubles __attribute__((vector_size(32)));
+  typedef int64_t Counts __attribute__((vector_size(32)));
+};
+
+// small_set_knn_batch for up to kLanes queries, one lane each (spare lanes repeat the first
+// query); inlined into each instruction-set clone of its caller.
+template <size_t kLanes>
+[[gnu::always_inline]] inline void knn_lanes(const double* xyz, size_t n, const double* queries,
+                                             size_t m, size_t k, Neighbor* out) {
+  using Doubles = typename LaneVectors<kLanes>::Doubles;
+  using Counts = typename LaneVectors<kLanes>::Counts;
   Doubles qx, qy, qz;
-  for (size_t q = 0; q < kSmallSetBatch; ++q) {
-    const size_t row = q < m ? q : 0;  // spare lanes repeat the first query
+  for (size_t q = 0; q < kLanes; ++q) {
+    const size_t row = q < m ? q : 0;
     qx[q] = queries[3 * row];
     qy[q] = queries[3 * row + 1];
     qz[q] = queries[3 * row + 2];
@@ -86,11 +100,32 @@ void small_set_knn_batch(const double* xyz, size_t n, const double* queries, siz
   }
   // The places of a query's points are 0 .. n−1 without repeats: write all, keep the first k.
   std::array<Neighbor, kSmallSetSize> sorted;
-  for (size_t q = 0; q < m; ++q) {
+  for (size_t q = 0; q < std::min(m, kLanes); ++q) {
     for (size_t j = 0; j < n; ++j) {
       sorted[static_cast<size_t>(place[j][q])] = {d[j][q], static_cast<int32_t>(j)};
     }
     std::copy_n(sorted.begin(), k, out + q * k);
+  }
+}
+
+}  // namespace
+
+DYNSCOPE_ISA_CLONES
+void small_set_knn_batch(const double* xyz, size_t n, const double* queries, size_t m, size_t k,
+                         Neighbor* out) {
+  n = std::min(n, kSmallSetSize);
+  m = std::min(m, kSmallSetBatch);
+  k = std::min(k, n);
+  if (m == 0 || k == 0) return;
+  // One lane per query: all of them in one vector of 8 doubles where that is one register
+  // (AVX-512); else four at a time, one AVX2 register (wide_vector_registers()).
+  if (wide_vector_registers()) {
+    knn_lanes<kSmallSetBatch>(xyz, n, queries, m, k, out);
+    return;
+  }
+  constexpr size_t kHalf = kSmallSetBatch / 2;
+  for (size_t q0 = 0; q0 < m; q0 += kHalf) {
+    knn_lanes<kHalf>(xyz, n, queries + 3 * q0, m - q0, k, out + q0 * k);
   }
 }
 

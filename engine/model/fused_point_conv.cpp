@@ -386,18 +386,29 @@ void layer_norm_relu_baseline(const float* x, const float* w, const float* b, fl
 
 std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
 
-// One version per clone of DYNSCOPE_ISA_CLONES, dispatched by the same rule.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target("default"))) const char* isa_of_this_cpu() { return "baseline"; }
-__attribute__((target(DYNSCOPE_ISA_V3))) const char* isa_of_this_cpu() { return "x86-64-v3"; }
-__attribute__((target(DYNSCOPE_ISA_V4))) const char* isa_of_this_cpu() { return "x86-64-v4"; }
-#else
-const char* isa_of_this_cpu() { return "baseline"; }
-#endif
-
 }  // namespace
 
-const char* fused_kernel_isa() { return isa_of_this_cpu(); }
+const char* fused_kernel_isa() { return isa_level(); }
+
+namespace {
+std::atomic<KernelBlocking> g_blocking{KernelBlocking::kAuto};
+}  // namespace
+
+KernelBlocking kernel_blocking() { return g_blocking.load(); }
+
+void set_kernel_blocking(KernelBlocking blocking) { g_blocking.store(blocking); }
+
+const char* fused_kernel_blocking() {
+  switch (g_blocking.load(std::memory_order_relaxed)) {
+    case KernelBlocking::kWide:
+      return "wide";
+    case KernelBlocking::kNarrow:
+      return "narrow";
+    case KernelBlocking::kAuto:
+      break;
+  }
+  return wide_vector_registers() ? "wide" : "narrow";
+}
 
 ConvImplementation conv_implementation() { return g_implementation.load(); }
 

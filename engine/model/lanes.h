@@ -33,7 +33,20 @@ DYNSCOPE_KERNEL_BODY void relu_lanes(V& v) {
   v = v > 0.0f ? v : V{};
 }
 
+// Floats per vector.
+template <class V>
+constexpr int64_t kLanes = static_cast<int64_t>(sizeof(V) / sizeof(float));
+
 // The sum of a vector's lanes, by halves.
+DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes8& v) {
+  typedef float Lanes4 __attribute__((vector_size(16)));
+  Lanes4 a, b;
+  std::memcpy(&a, &v, sizeof a);
+  std::memcpy(&b, reinterpret_cast<const char*>(&v) + sizeof a, sizeof b);
+  const Lanes4 s4 = a + b;
+  return (s4[0] + s4[1]) + (s4[2] + s4[3]);
+}
+
 DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes16& v) {
   typedef float Lanes4 __attribute__((vector_size(16)));
   Lanes8 lo, hi;
@@ -88,29 +101,33 @@ DYNSCOPE_KERNEL_BODY void apply_linear(float* __restrict y, const float* __restr
 
 // apply_linear for four queries at once: x holds their rows (`[4][n]`), y gets `[4][n_out]`. Each
 // weight vector loaded serves the four rows, so the products run at the vector units' rate rather
-// than the loads'.
+// than the loads'. kOut outputs at a time, each a V of partial sums per row: 4 × 4 Lanes16 (16
+// registers of AVX-512's 32) or, where registers are 16 (AVX2, SSE2), 4 × 2 Lanes8, which keeps
+// the sums in registers instead of spilling them at every product.
+template <class V = Lanes16, int kOut = 4>
 DYNSCOPE_KERNEL_BODY void apply_linear4(float* __restrict y, const float* __restrict x, int64_t n,
                                         const float* __restrict w, int64_t n_out) {
-  const int64_t n16 = n / 16 * 16;
+  constexpr int64_t kL = kLanes<V>;
+  const int64_t nl = n / kL * kL;
   int64_t o = 0;
-  for (; o + 4 <= n_out; o += 4) {
-    Lanes16 s[4][4] = {};  // [query][output]
-    for (int64_t i = 0; i < n16; i += 16) {
-      Lanes16 xv[4];
+  for (; o + kOut <= n_out; o += kOut) {
+    V s[4][kOut] = {};  // [query][output]
+    for (int64_t i = 0; i < nl; i += kL) {
+      V xv[4];
 #pragma GCC unroll 4
       for (int r = 0; r < 4; ++r) load_lanes(xv[r], x + r * n + i);
 #pragma GCC unroll 4
-      for (int u = 0; u < 4; ++u) {
-        Lanes16 wv;
+      for (int u = 0; u < kOut; ++u) {
+        V wv;
         load_lanes(wv, w + (o + u) * n + i);
 #pragma GCC unroll 4
         for (int r = 0; r < 4; ++r) s[r][u] += xv[r] * wv;
       }
     }
     for (int r = 0; r < 4; ++r) {
-      for (int u = 0; u < 4; ++u) {
+      for (int u = 0; u < kOut; ++u) {
         float sum = lane_sum(s[r][u]);
-        for (int64_t i = n16; i < n; ++i) sum += w[(o + u) * n + i] * x[r * n + i];
+        for (int64_t i = nl; i < n; ++i) sum += w[(o + u) * n + i] * x[r * n + i];
         y[r * n_out + o + u] = sum;
       }
     }

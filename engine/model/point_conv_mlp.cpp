@@ -144,6 +144,7 @@ constexpr int64_t blocked_row_stride(int64_t ct) { return (ct + 7) / 8 * 8; }
 struct BlockedWeights {
   Lanes8 w1[3], b1, w2[8], b2;  // w1[d] = column d of W1; w2[i] = row i of W2ᵀ
   Lanes16 w3[8], b3;            // w3[i] = row i of W3ᵀ
+  Lanes8 w3h[8][2], b3h[2];     // the same in halves, for 16 registers of 8 floats
   Lanes8 e1[3], c1, e2[8], c2;  // the embedding's, likewise (unused without one)
 };
 
@@ -157,6 +158,10 @@ DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool
   load_lanes(w.b2, a.b2);
   for (int i = 0; i < 8; ++i) load_lanes(w.w3[i], a.w3t + 16 * i);
   load_lanes(w.b3, a.b3);
+  for (int half = 0; half < 2; ++half) {
+    for (int i = 0; i < 8; ++i) load_lanes(w.w3h[i][half], a.w3t + 16 * i + 8 * half);
+    load_lanes(w.b3h[half], a.b3 + 8 * half);
+  }
   if (embedding) {
     for (int d = 0; d < 3; ++d) {
       for (int o = 0; o < 8; ++o) w.e1[d][o] = a.e1[3 * o + d];
@@ -186,6 +191,28 @@ DYNSCOPE_KERNEL_BODY void weightnet(const BlockedWeights& w, const float* r, flo
   for (int i = 0; i < 8; ++i) h += h2[i] * w.w3[i];
 }
 
+// weightnet with h in halves of 8 (h[0, 8) in `lo`, h[8, 16) in `hi`): the same products in the same
+// order, in registers of 8 floats.
+DYNSCOPE_KERNEL_BODY void weightnet_halves(const BlockedWeights& w, const float* r, float* h1,
+                                           float* h2, Lanes8& v1, Lanes8& v2, Lanes8& lo,
+                                           Lanes8& hi) {
+  v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
+  relu_lanes(v1);
+  spill_lanes(h1, v1);
+  v2 = w.b2;
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) v2 += h1[i] * w.w2[i];
+  relu_lanes(v2);
+  spill_lanes(h2, v2);
+  lo = w.b3h[0];
+  hi = w.b3h[1];
+#pragma GCC unroll 8
+  for (int i = 0; i < 8; ++i) {
+    lo += h2[i] * w.w3h[i][0];
+    hi += h2[i] * w.w3h[i][1];
+  }
+}
+
 // One neighbour's positional embedding: e = E2·p1 + c2 with p1 = relu(E1·r + c1), p1 left in `vp`
 // and in memory at `p1`.
 DYNSCOPE_KERNEL_BODY void embedding(const BlockedWeights& w, const float* r, float* p1, Lanes8& vp,
@@ -198,23 +225,45 @@ DYNSCOPE_KERNEL_BODY void embedding(const BlockedWeights& w, const float* r, flo
   for (int i = 0; i < 8; ++i) e += p1[i] * w.e2[i];
 }
 
-// out[j·out_stride + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j < 16 and i < the
-// lanes of V (16 or 8): one block of channels of a query's aggregation over its nv gathered
-// neighbour rows, the 16 sums (one per filter row) kept in registers and each output written once.
-template <class V>
+// out[j·out_stride + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j0 <= j < j0 + kRows
+// and i < the lanes of V (16 or 8): one block of channels and filter rows of a query's
+// aggregation over its nv gathered neighbour rows, the kRows sums kept in registers and each
+// output written once.
+template <class V, int kRows>
 DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t out_stride,
                                           const float* __restrict x, int64_t stride, int64_t c0,
-                                          const float* __restrict h, int64_t nv) {
-  V acc[16] = {};
+                                          const float* __restrict h, int64_t nv, int j0) {
+  V acc[kRows] = {};
   for (int64_t t = 0; t < nv; ++t) {
     V xt;
     load_lanes(xt, x + t * stride + c0);
-    const float* ht = h + t * 16;
+    const float* ht = h + t * 16 + j0;
 #pragma GCC unroll 16
-    for (int jj = 0; jj < 16; ++jj) acc[jj] += ht[jj] * xt;
+    for (int jj = 0; jj < kRows; ++jj) acc[jj] += ht[jj] * xt;
   }
 #pragma GCC unroll 16
-  for (int jj = 0; jj < 16; ++jj) store_lanes(out + jj * out_stride + c0, acc[jj]);
+  for (int jj = 0; jj < kRows; ++jj) store_lanes(out + (j0 + jj) * out_stride + c0, acc[jj]);
+}
+
+// A query's whole aggregate row `[16][cp]` (cp a multiple of 8) in blocks of channels: with wide
+// registers (AVX-512: 32 of 16 floats) each block's 16 filter rows at once, 16 sums of 16 or 8
+// channels; with 16 registers (AVX2 of 8 floats) half of the rows of an 8-channel block, 8 sums
+// of 8 floats, so that the sums stay in registers (vectors of 16 floats, two registers each
+// there, are moved through memory). Both add the same products in the same order.
+template <bool kWide>
+DYNSCOPE_KERNEL_BODY void aggregate_row(float* __restrict out, int64_t cp,
+                                        const float* __restrict xs, const float* __restrict hs,
+                                        int64_t nv) {
+  int64_t c0 = 0;
+  if constexpr (kWide) {
+    for (; c0 + 16 <= cp; c0 += 16) aggregate_block<Lanes16, 16>(out, cp, xs, cp, c0, hs, nv, 0);
+    if (c0 < cp) aggregate_block<Lanes8, 16>(out, cp, xs, cp, c0, hs, nv, 0);
+  } else {
+    for (; c0 < cp; c0 += 8) {
+      aggregate_block<Lanes8, 8>(out, cp, xs, cp, c0, hs, nv, 0);
+      aggregate_block<Lanes8, 8>(out, cp, xs, cp, c0, hs, nv, 8);
+    }
+  }
 }
 
 // inference_rows_body for the model's MLP sizes, arranged for the vector units. Per query, each
@@ -224,7 +273,7 @@ DYNSCOPE_KERNEL_BODY void aggregate_block(float* __restrict out, int64_t out_str
 // neighbours. The previous arrangement added every neighbour's outer product into an accumulator
 // in memory (a load and a store per channel and neighbour) and transposed it into the output one
 // float at a time. `scratch` holds inference_scratch floats.
-template <class D>
+template <class D, bool kWide>
 DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* out, int64_t begin,
                                                  int64_t end, D d, float* scratch) {
   constexpr bool kEmbedding = D{}.P() == 8;
@@ -264,10 +313,21 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
       if (src < 0) continue;
       const float* r = a.rel + e * 3;
       Lanes8 v1, v2;
-      Lanes16 h;
-      weightnet(w, r, hidden, hidden, v1, v2, h);
-      if (a.gate) h *= a.gate[e];
-      store_lanes(hs + nv * 16, h);
+      if constexpr (kWide) {
+        Lanes16 h;
+        weightnet(w, r, hidden, hidden, v1, v2, h);
+        if (a.gate) h *= a.gate[e];
+        store_lanes(hs + nv * 16, h);
+      } else {
+        Lanes8 lo, hi;
+        weightnet_halves(w, r, hidden, hidden, v1, v2, lo, hi);
+        if (a.gate) {
+          lo *= a.gate[e];
+          hi *= a.gate[e];
+        }
+        store_lanes(hs + nv * 16, lo);
+        store_lanes(hs + nv * 16 + 8, hi);
+      }
       float* x = xs + nv * cp;
       std::copy(a.features + src * c, a.features + (src + 1) * c, x);
       if constexpr (kEmbedding) {
@@ -286,9 +346,7 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
     }
     // The aggregate row, [16][cp]: straight into the output when it has that layout.
     float* o = (linear || padded) ? row + pending * 16 * cp : out + q * 16 * ct;
-    int64_t c0 = 0;
-    for (; c0 + 16 <= cp; c0 += 16) aggregate_block<Lanes16>(o, cp, xs, cp, c0, hs, nv);
-    if (c0 < cp) aggregate_block<Lanes8>(o, cp, xs, cp, c0, hs, nv);
+    aggregate_row<kWide>(o, cp, xs, hs, nv);
     if (!linear) {
       if (padded) {
         for (int64_t jj = 0; jj < 16; ++jj) {
@@ -299,10 +357,14 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
     }
     rows[pending++] = q;
     if (pending == 4) {
-      if (rows[3] == rows[0] + 3) {
-        apply_linear4(out + rows[0] * a.n_out, row, 16 * cp, linear, a.n_out);
+      float* y = rows[3] == rows[0] + 3 ? out + rows[0] * a.n_out : four.data();
+      // Four sums of 16-float vectors per row with wide registers, two of 8 with 16 registers.
+      if constexpr (kWide) {
+        apply_linear4<Lanes16, 4>(y, row, 16 * cp, linear, a.n_out);
       } else {
-        apply_linear4(four.data(), row, 16 * cp, linear, a.n_out);
+        apply_linear4<Lanes8, 2>(y, row, 16 * cp, linear, a.n_out);
+      }
+      if (y == four.data()) {
         for (int r = 0; r < 4; ++r) {
           std::copy(four.data() + r * a.n_out, four.data() + (r + 1) * a.n_out,
                     out + rows[r] * a.n_out);
@@ -324,11 +386,11 @@ int64_t inference_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t 
                   k * (16 + blocked_row_stride(ct)) + 8 + 4 * 16 * blocked_row_stride(ct));
 }
 
-template <class D>
+template <class D, bool kWide>
 DYNSCOPE_KERNEL_BODY void inference_rows(const InferenceArgs& a, float* out, int64_t begin,
                                          int64_t end, D d, float* scratch) {
   if constexpr (kBlockedDims<D>) {
-    inference_rows_blocked(a, out, begin, end, d, scratch);
+    inference_rows_blocked<D, kWide>(a, out, begin, end, d, scratch);
   } else {
     inference_rows_body(a, out, begin, end, d, scratch);
   }
@@ -337,13 +399,17 @@ DYNSCOPE_KERNEL_BODY void inference_rows(const InferenceArgs& a, float* out, int
 template <class D>
 void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, int64_t end, D d,
                              float* scratch) {
-  inference_rows(a, out, begin, end, d, scratch);
+  inference_rows<D, false>(a, out, begin, end, d, scratch);  // SSE2: 16 registers
 }
 
 template <class D>
 DYNSCOPE_ISA_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
                                              int64_t end, D d, float* scratch) {
-  inference_rows(a, out, begin, end, d, scratch);
+  if (wide_kernel_blocking()) {
+    inference_rows<D, true>(a, out, begin, end, d, scratch);
+  } else {
+    inference_rows<D, false>(a, out, begin, end, d, scratch);
+  }
 }
 
 // Offsets of the weight gradients in one flat per-worker buffer, in the transposed layouts the

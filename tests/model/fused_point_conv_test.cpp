@@ -422,6 +422,57 @@ TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
                ValueError);
 }
 
+// The arranged inference kernel keeps its sums in registers in 16-row blocks of 16 floats where
+// the CPU has AVX-512's 32 wide registers and in 8-row blocks of 8 floats elsewhere (a 16-float
+// vector is two AVX2 registers, and GCC moved arrays of them through memory at every product).
+// Both arrangements run on any CPU when forced: each against the composition of LibTorch ops,
+// with and without the linear inside (four queries at a time, with outputs past a multiple of
+// the sums kept per row), a gate and an embedding, at channel counts that give every block
+// arrangement. kAuto follows the instruction-set level.
+TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
+  EXPECT_EQ(kernel_blocking(), KernelBlocking::kAuto);
+  EXPECT_STREQ(fused_kernel_blocking(),
+               std::string(fused_kernel_isa()) == "x86-64-v4" ? "wide" : "narrow");
+  for (KernelBlocking blocking : {KernelBlocking::kWide, KernelBlocking::kNarrow}) {
+    set_kernel_blocking(blocking);
+    EXPECT_STREQ(fused_kernel_blocking(), blocking == KernelBlocking::kWide ? "wide" : "narrow");
+    for (bool gated : {false, true}) {
+      for (int64_t pos : {0, 8}) {
+        for (int64_t channels : {6, 8, 32, 45}) {
+          ConvCase cs = make_conv_case(60, 50, 7, channels, 70 + gated + pos + channels);
+          PointConv conv(PointConvOptions(channels, 9).c_mid(16).pos_channels(pos));
+          NeighborTensors nb = cs.nb;
+          nb.prepare(cs.query, cs.source);
+          const torch::Tensor rel = nb.rel * 3.0f;
+          const torch::Tensor index = masked_index(nb);
+          const torch::Tensor gate =
+              gated ? torch::rand({nb.rows(), index.size(1)}) : torch::Tensor();
+          torch::NoGradGuard no_grad;
+          torch::Tensor h = conv->weightnet->forward(rel);
+          if (gated) h = h * gate.unsqueeze(-1);
+          const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
+          const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
+          const torch::Tensor fused =
+              point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
+          EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
+              << fused_kernel_blocking() << " channels " << channels << " pos " << pos
+              << ": " << (fused - ref).abs().max();
+          for (int64_t n_out : {3, 9, 32}) {
+            const torch::Tensor weight = torch::randn({n_out, ref.size(1)});
+            const torch::Tensor linear = point_conv_aggregate_mlp_linear(
+                cs.features, rel, conv->edge_mlps(), gate, index, weight);
+            const torch::Tensor expected = torch::mm(ref, weight.t());
+            EXPECT_TRUE(torch::allclose(linear, expected, 1e-4, 1e-4))
+                << fused_kernel_blocking() << " channels " << channels << " pos " << pos
+                << " outputs " << n_out << ": " << (linear - expected).abs().max();
+          }
+        }
+      }
+    }
+  }
+  set_kernel_blocking(KernelBlocking::kAuto);
+}
+
 TEST(FusedPointConvTest, GnnConvMatchesItsUnfusedFormulation) {
   for (bool normalize : {false, true}) {
     ConvCase cs = make_conv_case(35, 20, 5, 6, normalize ? 21 : 22);
