@@ -486,6 +486,47 @@ DYNSCOPE_KERNEL_BODY void linear_weight_grad(float* __restrict dwt, float* __res
   }
 }
 
+// linear_weight_grad for 8 inputs and kOut (8 or 16) outputs in vectors of 8 floats: four inputs'
+// rows of dwt at a time, kOut / 8 vectors each, summed over the edges in registers (8 of them for
+// 16 outputs), where the loop over a run-time width kept its sums in memory. The same sums in the
+// same order.
+template <int kOut>
+DYNSCOPE_KERNEL_BODY void linear_weight_grad8(float* __restrict dwt, float* __restrict db,
+                                              const float* __restrict x,
+                                              const float* __restrict dy, int64_t n) {
+  constexpr int kV = kOut / 8;
+  for (int i0 = 0; i0 < 8; i0 += 4) {
+    Lanes8 acc[4][kV];
+#pragma GCC unroll 4
+    for (int u = 0; u < 4; ++u) {
+      for (int v = 0; v < kV; ++v) load_lanes(acc[u][v], dwt + (i0 + u) * kOut + 8 * v);
+    }
+    for (int64_t e = 0; e < n; ++e) {
+      Lanes8 g[kV];
+      for (int v = 0; v < kV; ++v) load_lanes(g[v], dy + e * kOut + 8 * v);
+#pragma GCC unroll 4
+      for (int u = 0; u < 4; ++u) {
+        const float s = x[e * 8 + i0 + u];
+        for (int v = 0; v < kV; ++v) acc[u][v] += s * g[v];
+      }
+    }
+#pragma GCC unroll 4
+    for (int u = 0; u < 4; ++u) {
+      for (int v = 0; v < kV; ++v) store_lanes(dwt + (i0 + u) * kOut + 8 * v, acc[u][v]);
+    }
+  }
+  Lanes8 b[kV];
+  for (int v = 0; v < kV; ++v) load_lanes(b[v], db + 8 * v);
+  for (int64_t e = 0; e < n; ++e) {
+    for (int v = 0; v < kV; ++v) {
+      Lanes8 g;
+      load_lanes(g, dy + e * kOut + 8 * v);
+      b[v] += g;
+    }
+  }
+  for (int v = 0; v < kV; ++v) store_lanes(db + 8 * v, b[v]);
+}
+
 // Weight and bias gradients of first_layer (`[n_out,3]`) over n edges: da `[n][n_out]` is the
 // pre-activation gradient of each edge and rel + edge[e]·3 its relative position.
 DYNSCOPE_KERNEL_BODY void first_layer_weight_grad(float* __restrict dw, float* __restrict db,
@@ -677,8 +718,9 @@ DYNSCOPE_KERNEL_BODY void combine_block(float* __restrict dx, const float* __res
 // gradients of the MLPs' linears run over W's rows (Σ_o dy[o]·W[o,:]) instead of one dot product
 // per input; the filter gradient sums over the channels in four chains; the feature gradient
 // sums G's rows (padded by zeros to a multiple of 8 channels) in blocks of 16 and 8. The same
-// per-query weight gradients follow.
-template <class D>
+// per-query weight gradients follow. With 16 vector registers (!kWide) every vector of 16 floats
+// is kept as two of 8 (h, the filter gradient's chains, G's rows), as in inference_rows_blocked.
+template <class D, bool kWide>
 DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const float* grad,
                                                 float* d_feat, float* d_gate, float* dw,
                                                 const MlpGradLayout& lay, int64_t begin,
@@ -712,46 +754,85 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
       const float* r = a.rel + e * 3;
       const float gate = a.gate ? a.gate[e] : 1.0f;
       Lanes8 v1, v2;
-      Lanes16 h;
-      weightnet(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, h);
-      const Lanes16 gated = h * gate;
-      spill_lanes(hg, gated);
-      std::copy(a.features + src * c, a.features + (src + 1) * c, x);
-      if constexpr (kEmbedding) {
-        Lanes8 vp, pe;
-        embedding(w, r, p1 + nv * 8, vp, pe);
-        store_lanes(x + c, pe);
-      }
-      // d(gated h)[j] = Σ_c G[j,c] x[c], four chains over the channels.
-      Lanes16 chain[4] = {};
-      int64_t cc = 0;
-      for (; cc + 4 <= ct; cc += 4) {
-#pragma GCC unroll 4
-        for (int u = 0; u < 4; ++u) {
-          Lanes16 row;
-          load_lanes(row, gt + (cc + u) * 16);
-          chain[u] += x[cc + u] * row;
+      float* dhe = dh + nv * 16;
+      if constexpr (kWide) {
+        Lanes16 h;
+        weightnet(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, h);
+        const Lanes16 gated = h * gate;
+        spill_lanes(hg, gated);
+        std::copy(a.features + src * c, a.features + (src + 1) * c, x);
+        if constexpr (kEmbedding) {
+          Lanes8 vp, pe;
+          embedding(w, r, p1 + nv * 8, vp, pe);
+          store_lanes(x + c, pe);
         }
+        // d(gated h)[j] = Σ_c G[j,c] x[c], four chains over the channels.
+        Lanes16 chain[4] = {};
+        int64_t cc = 0;
+        for (; cc + 4 <= ct; cc += 4) {
+#pragma GCC unroll 4
+          for (int u = 0; u < 4; ++u) {
+            Lanes16 row;
+            load_lanes(row, gt + (cc + u) * 16);
+            chain[u] += x[cc + u] * row;
+          }
+        }
+        for (; cc < ct; ++cc) {
+          Lanes16 row;
+          load_lanes(row, gt + cc * 16);
+          chain[0] += x[cc] * row;
+        }
+        const Lanes16 dgated = (chain[0] + chain[1]) + (chain[2] + chain[3]);
+        // dx[c] = Σ_j gate·h[j] G[j,c].
+        int64_t c0 = 0;
+        for (; c0 + 16 <= cp; c0 += 16) combine_block<Lanes16>(dx, gp, cp, c0, hg);
+        if (c0 < cp) combine_block<Lanes8>(dx, gp, cp, c0, hg);
+        if (d_gate) d_gate[e] = lane_sum(dgated * h);
+        spill_lanes(dhe, dgated * gate);
+      } else {
+        Lanes8 lo, hi;
+        weightnet_halves(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, lo, hi);
+        spill_lanes(hg, lo * gate);
+        spill_lanes(hg + 8, hi * gate);
+        std::copy(a.features + src * c, a.features + (src + 1) * c, x);
+        if constexpr (kEmbedding) {
+          Lanes8 vp, pe;
+          embedding(w, r, p1 + nv * 8, vp, pe);
+          store_lanes(x + c, pe);
+        }
+        // The same four chains, each in halves.
+        Lanes8 chain_lo[4] = {}, chain_hi[4] = {};
+        int64_t cc = 0;
+        for (; cc + 4 <= ct; cc += 4) {
+#pragma GCC unroll 4
+          for (int u = 0; u < 4; ++u) {
+            Lanes8 row_lo, row_hi;
+            load_lanes(row_lo, gt + (cc + u) * 16);
+            load_lanes(row_hi, gt + (cc + u) * 16 + 8);
+            chain_lo[u] += x[cc + u] * row_lo;
+            chain_hi[u] += x[cc + u] * row_hi;
+          }
+        }
+        for (; cc < ct; ++cc) {
+          Lanes8 row_lo, row_hi;
+          load_lanes(row_lo, gt + cc * 16);
+          load_lanes(row_hi, gt + cc * 16 + 8);
+          chain_lo[0] += x[cc] * row_lo;
+          chain_hi[0] += x[cc] * row_hi;
+        }
+        const Lanes8 d_lo = (chain_lo[0] + chain_lo[1]) + (chain_lo[2] + chain_lo[3]);
+        const Lanes8 d_hi = (chain_hi[0] + chain_hi[1]) + (chain_hi[2] + chain_hi[3]);
+        for (int64_t c0 = 0; c0 < cp; c0 += 8) combine_block<Lanes8>(dx, gp, cp, c0, hg);
+        if (d_gate) d_gate[e] = lane_sum(d_lo * lo) + lane_sum(d_hi * hi);
+        spill_lanes(dhe, d_lo * gate);
+        spill_lanes(dhe + 8, d_hi * gate);
       }
-      for (; cc < ct; ++cc) {
-        Lanes16 row;
-        load_lanes(row, gt + cc * 16);
-        chain[0] += x[cc] * row;
-      }
-      const Lanes16 dgated = (chain[0] + chain[1]) + (chain[2] + chain[3]);
-      // dx[c] = Σ_j gate·h[j] G[j,c].
-      int64_t c0 = 0;
-      for (; c0 + 16 <= cp; c0 += 16) combine_block<Lanes16>(dx, gp, cp, c0, hg);
-      if (c0 < cp) combine_block<Lanes8>(dx, gp, cp, c0, hg);
       if (d_feat) {
         float* __restrict dst = d_feat + src * c;
 #pragma omp simd
         for (int64_t i = 0; i < c; ++i) dst[i] += dx[i];
       }
-      if (d_gate) d_gate[e] = lane_sum(dgated * h);
       // WeightNet: h = W3 h2 + b3, h2 = relu(W2 h1 + b2), h1 = relu(W1 r + b1).
-      float* dhe = dh + nv * 16;
-      spill_lanes(dhe, dgated * gate);
       Lanes8 g2 = {};
 #pragma GCC unroll 16
       for (int o = 0; o < 16; ++o) g2 += dhe[o] * wg.w3[o];
@@ -777,11 +858,20 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
       edges[nv++] = e;
     }
     if (nv == 0) continue;
-    linear_weight_grad(dw + lay.w3t, dw + lay.b3, h2, 8, dh, 16, nv);
-    linear_weight_grad(dw + lay.w2t, dw + lay.b2, h1, 8, dh2, 8, nv);
+    if constexpr (kWide) {
+      linear_weight_grad(dw + lay.w3t, dw + lay.b3, h2, 8, dh, 16, nv);
+      linear_weight_grad(dw + lay.w2t, dw + lay.b2, h1, 8, dh2, 8, nv);
+    } else {
+      linear_weight_grad8<16>(dw + lay.w3t, dw + lay.b3, h2, dh, nv);
+      linear_weight_grad8<8>(dw + lay.w2t, dw + lay.b2, h1, dh2, nv);
+    }
     first_layer_weight_grad(dw + lay.w1, dw + lay.b1, a.rel, edges, dh1, 8, nv);
     if constexpr (kEmbedding) {
-      linear_weight_grad(dw + lay.e2t, dw + lay.c2, p1, 8, de, 8, nv);
+      if constexpr (kWide) {
+        linear_weight_grad(dw + lay.e2t, dw + lay.c2, p1, 8, de, 8, nv);
+      } else {
+        linear_weight_grad8<8>(dw + lay.e2t, dw + lay.c2, p1, de, nv);
+      }
       first_layer_weight_grad(dw + lay.e1, dw + lay.c1, a.rel, edges, dp1, 8, nv);
     }
   }
@@ -797,13 +887,14 @@ int64_t mlp_grad_scratch(int64_t ct, int64_t j, int64_t hd, int64_t p, int64_t p
                                k * (4 * hd + j + 2 * ph + p));
 }
 
-template <class D>
+template <class D, bool kWide>
 DYNSCOPE_KERNEL_BODY void mlp_grad_rows(const InferenceArgs& a, const float* grad, float* d_feat,
                                         float* d_gate, float* dw, const MlpGradLayout& lay,
                                         int64_t begin, int64_t end, D d, float* scratch,
                                         int64_t* edges) {
   if constexpr (kBlockedDims<D>) {
-    mlp_grad_rows_blocked(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+    mlp_grad_rows_blocked<D, kWide>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch,
+                                    edges);
   } else {
     mlp_grad_rows_body(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
   }
@@ -813,7 +904,7 @@ template <class D>
 void mlp_grad_rows_baseline(const InferenceArgs& a, const float* grad, float* d_feat, float* d_gate,
                             float* dw, const MlpGradLayout& lay, int64_t begin, int64_t end, D d,
                             float* scratch, int64_t* edges) {
-  mlp_grad_rows(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  mlp_grad_rows<D, false>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
 }
 
 template <class D>
@@ -821,7 +912,11 @@ DYNSCOPE_ISA_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float*
                                             float* d_feat, float* d_gate, float* dw,
                                             const MlpGradLayout& lay, int64_t begin, int64_t end,
                                             D d, float* scratch, int64_t* edges) {
-  mlp_grad_rows(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  if (wide_kernel_blocking()) {
+    mlp_grad_rows<D, true>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  } else {
+    mlp_grad_rows<D, false>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
+  }
 }
 
 // What the MLP aggregation's kernels read, prepared once per call: contiguous float inputs and the

@@ -426,7 +426,7 @@ TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
 // the CPU has AVX-512's 32 wide registers and in 8-row blocks of 8 floats elsewhere (a 16-float
 // vector is two AVX2 registers, and GCC moved arrays of them through memory at every product).
 // Both arrangements run on any CPU when forced: each against the composition of LibTorch ops,
-// with and without the linear inside (four queries at a time, with outputs past a multiple of
+// forward and backward, and without gradients with and without the linear inside (four queries at a time, with outputs past a multiple of
 // the sums kept per row), a gate and an embedding, at channel counts that give every block
 // arrangement. kAuto follows the instruction-set level.
 TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
@@ -445,9 +445,8 @@ TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
           nb.prepare(cs.query, cs.source);
           const torch::Tensor rel = nb.rel * 3.0f;
           const torch::Tensor index = masked_index(nb);
-          const torch::Tensor gate =
-              gated ? torch::rand({nb.rows(), index.size(1)}) : torch::Tensor();
-          torch::NoGradGuard no_grad;
+          torch::Tensor gate;
+          if (gated) gate = torch::rand({nb.rows(), index.size(1)}).requires_grad_(true);
           torch::Tensor h = conv->weightnet->forward(rel);
           if (gated) h = h * gate.unsqueeze(-1);
           const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
@@ -457,6 +456,28 @@ TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
           EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
               << fused_kernel_blocking() << " channels " << channels << " pos " << pos
               << ": " << (fused - ref).abs().max();
+          // The backward kernel's arrangements: gradients in the features, the gate and every
+          // weight of the WeightNet and the embedding.
+          std::vector<torch::Tensor> wrt{cs.features};
+          if (gated) wrt.push_back(gate);
+          for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
+          if (pos) {
+            for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
+          }
+          const torch::Tensor w = torch::randn_like(ref);
+          const auto gf = grads_of(fused, w, wrt);
+          const auto gr = grads_of(ref, w, wrt);
+          ASSERT_EQ(gf.size(), gr.size());
+          // Relative to each gradient's largest entry: a bias's gradient sums over every edge,
+          // and an entry where those sums cancel has no precision of its own.
+          for (size_t i = 0; i < gf.size(); ++i) {
+            const float diff = (gf[i] - gr[i]).abs().max().item<float>();
+            const float scale = gr[i].abs().max().item<float>();
+            EXPECT_LE(diff, 1e-4f * scale + 1e-5f)
+                << fused_kernel_blocking() << " channels " << channels << " pos " << pos
+                << " gated " << gated << " gradient " << i << " (largest entry " << scale << ")";
+          }
+          torch::NoGradGuard no_grad;
           for (int64_t n_out : {3, 9, 32}) {
             const torch::Tensor weight = torch::randn({n_out, ref.size(1)});
             const torch::Tensor linear = point_conv_aggregate_mlp_linear(
