@@ -48,16 +48,10 @@ DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes8& v) {
 }
 
 DYNSCOPE_KERNEL_BODY float lane_sum(const Lanes16& v) {
-  typedef float Lanes4 __attribute__((vector_size(16)));
   Lanes8 lo, hi;
   std::memcpy(&lo, &v, sizeof lo);
   std::memcpy(&hi, reinterpret_cast<const char*>(&v) + sizeof lo, sizeof hi);
-  const Lanes8 s8 = lo + hi;
-  Lanes4 a, b;
-  std::memcpy(&a, &s8, sizeof a);
-  std::memcpy(&b, reinterpret_cast<const char*>(&s8) + sizeof a, sizeof b);
-  const Lanes4 s4 = a + b;
-  return (s4[0] + s4[1]) + (s4[2] + s4[3]);
+  return lane_sum(lo + hi);
 }
 
 // y[o] = Σ_i w[o·n + i] · x[i] for o < n_out (a linear's weight `[n_out][n]` as LibTorch stores

@@ -173,11 +173,11 @@ DYNSCOPE_KERNEL_BODY BlockedWeights blocked_weights(const InferenceArgs& a, bool
   return w;
 }
 
-// One neighbour's WeightNet at relative position r: h = W3·h2 + b3 with h2 = relu(W2·h1 + b2) and
-// h1 = relu(W1·r + b1). The hidden layers are left in `v1`, `v2` and in memory at `h1`, `h2` (8
-// floats each; the same place will do when only h is wanted).
-DYNSCOPE_KERNEL_BODY void weightnet(const BlockedWeights& w, const float* r, float* h1, float* h2,
-                                    Lanes8& v1, Lanes8& v2, Lanes16& h) {
+// One neighbour's WeightNet hidden layers at relative position r: h2 = relu(W2·h1 + b2) and
+// h1 = relu(W1·r + b1), left in `v1`, `v2` and in memory at `h1`, `h2` (8 floats each; the same
+// place will do when only h2 is wanted).
+DYNSCOPE_KERNEL_BODY void weightnet_hidden(const BlockedWeights& w, const float* r, float* h1,
+                                           float* h2, Lanes8& v1, Lanes8& v2) {
   v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
   relu_lanes(v1);
   spill_lanes(h1, v1);
@@ -186,24 +186,23 @@ DYNSCOPE_KERNEL_BODY void weightnet(const BlockedWeights& w, const float* r, flo
   for (int i = 0; i < 8; ++i) v2 += h1[i] * w.w2[i];
   relu_lanes(v2);
   spill_lanes(h2, v2);
+}
+
+// The whole WeightNet, h = W3·h2 + b3 after weightnet_hidden.
+DYNSCOPE_KERNEL_BODY void weightnet(const BlockedWeights& w, const float* r, float* h1, float* h2,
+                                    Lanes8& v1, Lanes8& v2, Lanes16& h) {
+  weightnet_hidden(w, r, h1, h2, v1, v2);
   h = w.b3;
 #pragma GCC unroll 8
   for (int i = 0; i < 8; ++i) h += h2[i] * w.w3[i];
 }
 
-// weightnet with h in halves of 8 (h[0, 8) in `lo`, h[8, 16) in `hi`): the same products in the same
-// order, in registers of 8 floats.
+// weightnet with h in halves of 8 (h[0, 8) in `lo`, h[8, 16) in `hi`): the same products in the
+// same order, in registers of 8 floats.
 DYNSCOPE_KERNEL_BODY void weightnet_halves(const BlockedWeights& w, const float* r, float* h1,
                                            float* h2, Lanes8& v1, Lanes8& v2, Lanes8& lo,
                                            Lanes8& hi) {
-  v1 = w.b1 + w.w1[0] * r[0] + w.w1[1] * r[1] + w.w1[2] * r[2];
-  relu_lanes(v1);
-  spill_lanes(h1, v1);
-  v2 = w.b2;
-#pragma GCC unroll 8
-  for (int i = 0; i < 8; ++i) v2 += h1[i] * w.w2[i];
-  relu_lanes(v2);
-  spill_lanes(h2, v2);
+  weightnet_hidden(w, r, h1, h2, v1, v2);
   lo = w.b3h[0];
   hi = w.b3h[1];
 #pragma GCC unroll 8

@@ -301,6 +301,31 @@ TEST(FusedPointConvTest, PointConvMatchesItsUnfusedFormulation) {
   }
 }
 
+// The gradients of the fused MLP aggregation and of its reference, for one random output
+// gradient, in the features, the gate when there is one and every weight of the WeightNet and
+// of the embedding when there is one.
+std::pair<std::vector<torch::Tensor>, std::vector<torch::Tensor>> mlp_gradients(
+    const torch::Tensor& fused, const torch::Tensor& ref, const ConvCase& cs,
+    const torch::Tensor& gate, PointConv conv) {
+  std::vector<torch::Tensor> wrt{cs.features};
+  if (gate.defined()) wrt.push_back(gate);
+  for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
+  if (conv->pos_embed) {
+    for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
+  }
+  const torch::Tensor w = torch::randn_like(ref);
+  return {grads_of(fused, w, wrt), grads_of(ref, w, wrt)};
+}
+
+// The MLP aggregation composed of LibTorch ops and point_conv_aggregate: the reference.
+torch::Tensor mlp_composition(const ConvCase& cs, const torch::Tensor& rel, PointConv conv,
+                              const torch::Tensor& gate, const torch::Tensor& index) {
+  torch::Tensor h = conv->weightnet->forward(rel);
+  if (gate.defined()) h = h * gate.unsqueeze(-1);
+  const torch::Tensor edge = conv->pos_embed ? conv->pos_embed->forward(rel) : torch::Tensor();
+  return point_conv_aggregate(cs.features, edge, h, index);
+}
+
 // point_conv_aggregate_mlp_linear against the aggregation followed by torch::mm: without
 // gradients (the linear inside the op, four queries at a time: 50 queries leave two over) for
 // output counts below, at and past multiples of 4 and the kernels' channel arrangements; with
@@ -390,22 +415,11 @@ TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
           if (gated) gate = torch::rand({nb.rows(), nb.index.size(1)}).requires_grad_(true);
           const torch::Tensor fused =
               point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
-          torch::Tensor h = conv->weightnet->forward(rel);
-          if (gated) h = h * gate.unsqueeze(-1);
-          const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
-          const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
+          const torch::Tensor ref = mlp_composition(cs, rel, conv, gate, index);
           ASSERT_EQ(fused.sizes(), ref.sizes());
           EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
               << "channels " << channels << ": " << (fused - ref).abs().max();
-          std::vector<torch::Tensor> wrt{cs.features};
-          if (gated) wrt.push_back(gate);
-          for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
-          if (pos) {
-            for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
-          }
-          const torch::Tensor w = torch::randn_like(ref);
-          const auto gf = grads_of(fused, w, wrt);
-          const auto gr = grads_of(ref, w, wrt);
+          const auto [gf, gr] = mlp_gradients(fused, ref, cs, gate, conv);
           ASSERT_EQ(gf.size(), gr.size());
           for (size_t i = 0; i < gf.size(); ++i) {
             EXPECT_TRUE(torch::allclose(gf[i], gr[i], 1e-4, 1e-5))
@@ -447,10 +461,7 @@ TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
           const torch::Tensor index = masked_index(nb);
           torch::Tensor gate;
           if (gated) gate = torch::rand({nb.rows(), index.size(1)}).requires_grad_(true);
-          torch::Tensor h = conv->weightnet->forward(rel);
-          if (gated) h = h * gate.unsqueeze(-1);
-          const torch::Tensor edge = pos ? conv->pos_embed->forward(rel) : torch::Tensor();
-          const torch::Tensor ref = point_conv_aggregate(cs.features, edge, h, index);
+          const torch::Tensor ref = mlp_composition(cs, rel, conv, gate, index);
           const torch::Tensor fused =
               point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
           EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
@@ -458,15 +469,7 @@ TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
               << ": " << (fused - ref).abs().max();
           // The backward kernel's arrangements: gradients in the features, the gate and every
           // weight of the WeightNet and the embedding.
-          std::vector<torch::Tensor> wrt{cs.features};
-          if (gated) wrt.push_back(gate);
-          for (const torch::Tensor& p : conv->weightnet->parameters()) wrt.push_back(p);
-          if (pos) {
-            for (const torch::Tensor& p : conv->pos_embed->parameters()) wrt.push_back(p);
-          }
-          const torch::Tensor w = torch::randn_like(ref);
-          const auto gf = grads_of(fused, w, wrt);
-          const auto gr = grads_of(ref, w, wrt);
+          const auto [gf, gr] = mlp_gradients(fused, ref, cs, gate, conv);
           ASSERT_EQ(gf.size(), gr.size());
           // Relative to each gradient's largest entry: a bias's gradient sums over every edge,
           // and an entry where those sums cancel has no precision of its own.
