@@ -37,6 +37,7 @@ std::vector<std::pair<std::string, std::string>> torch_context() {
   out.emplace_back("torch_intraop_threads", std::to_string(at::get_num_threads()));
   out.emplace_back("torch_interop_threads", std::to_string(at::get_num_interop_threads()));
   out.emplace_back("kernel_isa", fused_kernel_isa());
+  out.emplace_back("kernel_blocking", fused_kernel_blocking());
   return out;
 }
 

@@ -73,7 +73,8 @@ TEST(InfoCommand, SystemNamesTheMappedBlasThreadsLibTorchAndGl) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   for (const char* key : {"cores", "compute_threads", "openmp_threads", "allocator", "blas",
-                          "libtorch", "cuda", "torch_intraop_threads", "gl_headless"}) {
+                          "libtorch", "cuda", "torch_intraop_threads", "kernel_isa",
+                          "kernel_blocking", "gl_headless"}) {
     EXPECT_TRUE(j.contains(key)) << key << " missing in " << r.output;
   }
   const std::string blas = j["blas"];
@@ -84,6 +85,8 @@ TEST(InfoCommand, SystemNamesTheMappedBlasThreadsLibTorchAndGl) {
   }
   EXPECT_EQ(j.contains("warning"), blas.find("/blas/libblas.so") != std::string::npos);
   EXPECT_EQ(j["compute_threads"], "1") << "the default budget is one thread";
+  // 16-row blocks of sums only where the kernels run their AVX-512 clone.
+  EXPECT_EQ(j["kernel_blocking"], j["kernel_isa"] == "x86-64-v4" ? "wide" : "narrow");
   EXPECT_EQ(j["allocator"].get<std::string>().rfind("dynscope", 0), 0u)
       << "a process that runs the model keeps freed memory: " << j["allocator"];
   const auto none = run_dynscope("info");
