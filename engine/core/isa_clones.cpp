@@ -1,6 +1,7 @@
 // isa_level: which instruction-set clone of the hot kernels this CPU runs.
 #include "engine/core/isa_clones.h"
 
+#include <atomic>
 #include <cstring>
 
 namespace dynscope {
@@ -19,9 +20,25 @@ const char* isa_of_this_cpu() { return "baseline"; }
 
 const char* isa_level() { return isa_of_this_cpu(); }
 
+namespace {
+std::atomic<KernelBlocking> g_blocking{KernelBlocking::kAuto};
+}  // namespace
+
+KernelBlocking kernel_blocking() { return g_blocking.load(); }
+
+void set_kernel_blocking(KernelBlocking blocking) { g_blocking.store(blocking); }
+
 bool wide_vector_registers() {
-  static const bool wide = std::strcmp(isa_level(), "x86-64-v4") == 0;
-  return wide;
+  static const bool v4 = std::strcmp(isa_level(), "x86-64-v4") == 0;
+  switch (g_blocking.load(std::memory_order_relaxed)) {
+    case KernelBlocking::kWide:
+      return true;
+    case KernelBlocking::kNarrow:
+      return false;
+    case KernelBlocking::kAuto:
+      break;
+  }
+  return v4;
 }
 
 }  // namespace dynscope

@@ -20,10 +20,17 @@ namespace dynscope {
 /// "baseline", by the same load-time dispatch as DYNSCOPE_ISA_CLONES.
 const char* isa_level();
 
-/// Whether this CPU's clones have 32 vector registers of 64 bytes (x86-64-v4). A clone's kernels
-/// that keep blocks of 16-float or 8-double vectors in registers do so only there: with 16
-/// registers of 32 bytes (AVX2) or 16 bytes such a vector takes two or four, and GCC moves arrays
-/// of them through memory at every operation, so those kernels use narrower blocks instead.
+/// How the cloned kernels keep their running sums in vector registers. kAuto follows the clone
+/// this CPU runs: kWide under AVX-512, whose 32 registers of 64 bytes hold blocks of 16-float or
+/// 8-double vectors, kNarrow under AVX2 and the baseline, where such a vector takes two or four of
+/// 16 registers and GCC moves arrays of them through memory at every operation, so the kernels use
+/// vectors of 32 bytes instead. kWide and kNarrow force one arrangement (process-wide), so tests
+/// and benchmarks can run both on any CPU; their results agree to rounding.
+enum class KernelBlocking { kAuto, kWide, kNarrow };
+KernelBlocking kernel_blocking();
+void set_kernel_blocking(KernelBlocking blocking);
+
+/// Whether the kernels run their wide arrangement: kernel_blocking() resolved on this CPU.
 bool wide_vector_registers();
 
 }  // namespace dynscope

@@ -24,15 +24,8 @@ void set_conv_implementation(ConvImplementation implementation);
 /// kernels themselves.
 const char* fused_kernel_isa();
 
-/// How the fused kernels' arranged paths keep their running sums in vector registers. kAuto
-/// follows the clone this CPU runs: kWide under AVX-512, whose 32 registers of 16 floats hold a
-/// 16-row block of sums, kNarrow under AVX2 and the baseline, whose 16 registers would spill
-/// such a block to memory at every product. kWide and kNarrow force one arrangement (process-wide),
-/// so tests and benchmarks can run both on any CPU; their results agree to rounding.
-enum class KernelBlocking { kAuto, kWide, kNarrow };
-KernelBlocking kernel_blocking();
-void set_kernel_blocking(KernelBlocking blocking);
-/// The arrangement kernel_blocking() resolves to on this CPU: "wide" or "narrow".
+/// The register arrangement the fused kernels run (kernel_blocking(), engine/core/isa_clones.h):
+/// "wide" or "narrow".
 const char* fused_kernel_blocking();
 
 }  // namespace dynscope

@@ -34,7 +34,7 @@ inline bool use_simd_clones() {
 }
 
 // Whether the arranged kernels keep 16-row blocks of sums in registers (kernel_blocking()).
-inline bool wide_kernel_blocking() { return fused_kernel_blocking()[0] == 'w'; }
+inline bool wide_kernel_blocking() { return wide_vector_registers(); }
 
 inline std::string shape(const torch::Tensor& t) {
   if (!t.defined()) return "undefined";

@@ -390,25 +390,7 @@ std::atomic<ConvImplementation> g_implementation{ConvImplementation::kFused};
 
 const char* fused_kernel_isa() { return isa_level(); }
 
-namespace {
-std::atomic<KernelBlocking> g_blocking{KernelBlocking::kAuto};
-}  // namespace
-
-KernelBlocking kernel_blocking() { return g_blocking.load(); }
-
-void set_kernel_blocking(KernelBlocking blocking) { g_blocking.store(blocking); }
-
-const char* fused_kernel_blocking() {
-  switch (g_blocking.load(std::memory_order_relaxed)) {
-    case KernelBlocking::kWide:
-      return "wide";
-    case KernelBlocking::kNarrow:
-      return "narrow";
-    case KernelBlocking::kAuto:
-      break;
-  }
-  return wide_vector_registers() ? "wide" : "narrow";
-}
+const char* fused_kernel_blocking() { return wide_vector_registers() ? "wide" : "narrow"; }
 
 ConvImplementation conv_implementation() { return g_implementation.load(); }
 

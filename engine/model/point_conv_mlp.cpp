@@ -491,8 +491,8 @@ DYNSCOPE_KERNEL_BODY void linear_weight_grad(float* __restrict dwt, float* __res
 // same order.
 template <int kOut>
 DYNSCOPE_KERNEL_BODY void linear_weight_grad8(float* __restrict dwt, float* __restrict db,
-                                              const float* __restrict x,
-                                              const float* __restrict dy, int64_t n) {
+                                              const float* __restrict x, const float* __restrict dy,
+                                              int64_t n) {
   constexpr int kV = kOut / 8;
   for (int i0 = 0; i0 < 8; i0 += 4) {
     Lanes8 acc[4][kV];

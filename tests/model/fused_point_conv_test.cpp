@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/core/error.h"
+#include "engine/core/isa_clones.h"
 #include "engine/model/conv_implementation.h"
 #include "engine/model/gnn_conv.h"
 #include "engine/model/neighbor_tensors.h"
@@ -440,9 +441,9 @@ TEST(FusedPointConvTest, TheMlpAggregationMatchesItsComposition) {
 // the CPU has AVX-512's 32 wide registers and in 8-row blocks of 8 floats elsewhere (a 16-float
 // vector is two AVX2 registers, and GCC moved arrays of them through memory at every product).
 // Both arrangements run on any CPU when forced: each against the composition of LibTorch ops,
-// forward and backward, and without gradients with and without the linear inside (four queries at a time, with outputs past a multiple of
-// the sums kept per row), a gate and an embedding, at channel counts that give every block
-// arrangement. kAuto follows the instruction-set level.
+// forward and backward, and without gradients with and without the linear inside (four queries at a
+// time, with outputs past a multiple of the sums kept per row), a gate and an embedding, at channel
+// counts that give every block arrangement. kAuto follows the instruction-set level.
 TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
   EXPECT_EQ(kernel_blocking(), KernelBlocking::kAuto);
   EXPECT_STREQ(fused_kernel_blocking(),
@@ -465,8 +466,8 @@ TEST(FusedPointConvTest, BothRegisterBlockingsMatchTheComposition) {
           const torch::Tensor fused =
               point_conv_aggregate_mlp(cs.features, rel, conv->edge_mlps(), gate, index);
           EXPECT_TRUE(torch::allclose(fused, ref, 1e-5, 1e-5))
-              << fused_kernel_blocking() << " channels " << channels << " pos " << pos
-              << ": " << (fused - ref).abs().max();
+              << fused_kernel_blocking() << " channels " << channels << " pos " << pos << ": "
+              << (fused - ref).abs().max();
           // The backward kernel's arrangements: gradients in the features, the gate and every
           // weight of the WeightNet and the embedding.
           const auto [gf, gr] = mlp_gradients(fused, ref, cs, gate, conv);
