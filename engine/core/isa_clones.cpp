@@ -16,13 +16,11 @@ __attribute__((target(DYNSCOPE_ISA_V4))) const char* isa_of_this_cpu() { return 
 const char* isa_of_this_cpu() { return "baseline"; }
 #endif
 
+std::atomic<KernelBlocking> g_blocking{KernelBlocking::kAuto};
+
 }  // namespace
 
 const char* isa_level() { return isa_of_this_cpu(); }
-
-namespace {
-std::atomic<KernelBlocking> g_blocking{KernelBlocking::kAuto};
-}  // namespace
 
 KernelBlocking kernel_blocking() { return g_blocking.load(); }
 

@@ -33,9 +33,6 @@ inline bool use_simd_clones() {
   return conv_implementation() != ConvImplementation::kFusedBaseline;
 }
 
-// Whether the arranged kernels keep 16-row blocks of sums in registers (kernel_blocking()).
-inline bool wide_kernel_blocking() { return wide_vector_registers(); }
-
 inline std::string shape(const torch::Tensor& t) {
   if (!t.defined()) return "undefined";
   std::string s = "[";

@@ -224,6 +224,19 @@ DYNSCOPE_KERNEL_BODY void embedding(const BlockedWeights& w, const float* r, flo
   for (int i = 0; i < 8; ++i) e += p1[i] * w.e2[i];
 }
 
+// A valid neighbour's gathered row x `[C']`: its features, then with an embedding its embedding
+// at relative position r (p1 left in memory at `p1`, as embedding() does).
+template <bool kEmbedding>
+DYNSCOPE_KERNEL_BODY void gather_neighbour_row(const InferenceArgs& a, const BlockedWeights& w,
+                                               const float* r, int64_t src, float* x, float* p1) {
+  std::copy(a.features + src * a.c, a.features + (src + 1) * a.c, x);
+  if constexpr (kEmbedding) {
+    Lanes8 vp, pe;
+    embedding(w, r, p1, vp, pe);
+    store_lanes(x + a.c, pe);
+  }
+}
+
 // out[j·out_stride + c0 + i] = Σ_t h[t·16 + j] · x[t·stride + c0 + i] for j0 <= j < j0 + kRows
 // and i < the lanes of V (16 or 8): one block of channels and filter rows of a query's
 // aggregation over its nv gathered neighbour rows, the kRows sums kept in registers and each
@@ -328,12 +341,7 @@ DYNSCOPE_KERNEL_BODY void inference_rows_blocked(const InferenceArgs& a, float* 
         store_lanes(hs + nv * 16 + 8, hi);
       }
       float* x = xs + nv * cp;
-      std::copy(a.features + src * c, a.features + (src + 1) * c, x);
-      if constexpr (kEmbedding) {
-        Lanes8 vp, pe;
-        embedding(w, r, hidden, vp, pe);
-        store_lanes(x + c, pe);
-      }
+      gather_neighbour_row<kEmbedding>(a, w, r, src, x, hidden);
       std::fill(x + ct, x + cp, 0.0f);
       ++nv;
     }
@@ -404,7 +412,7 @@ void inference_rows_baseline(const InferenceArgs& a, float* out, int64_t begin, 
 template <class D>
 DYNSCOPE_ISA_CLONES void inference_rows_simd(const InferenceArgs& a, float* out, int64_t begin,
                                              int64_t end, D d, float* scratch) {
-  if (wide_kernel_blocking()) {
+  if (wide_vector_registers()) {
     inference_rows<D, true>(a, out, begin, end, d, scratch);
   } else {
     inference_rows<D, false>(a, out, begin, end, d, scratch);
@@ -754,17 +762,12 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
       const float gate = a.gate ? a.gate[e] : 1.0f;
       Lanes8 v1, v2;
       float* dhe = dh + nv * 16;
+      gather_neighbour_row<kEmbedding>(a, w, r, src, x, p1 + nv * 8);
       if constexpr (kWide) {
         Lanes16 h;
         weightnet(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, h);
         const Lanes16 gated = h * gate;
         spill_lanes(hg, gated);
-        std::copy(a.features + src * c, a.features + (src + 1) * c, x);
-        if constexpr (kEmbedding) {
-          Lanes8 vp, pe;
-          embedding(w, r, p1 + nv * 8, vp, pe);
-          store_lanes(x + c, pe);
-        }
         // d(gated h)[j] = Σ_c G[j,c] x[c], four chains over the channels.
         Lanes16 chain[4] = {};
         int64_t cc = 0;
@@ -793,12 +796,6 @@ DYNSCOPE_KERNEL_BODY void mlp_grad_rows_blocked(const InferenceArgs& a, const fl
         weightnet_halves(w, r, h1 + nv * 8, h2 + nv * 8, v1, v2, lo, hi);
         spill_lanes(hg, lo * gate);
         spill_lanes(hg + 8, hi * gate);
-        std::copy(a.features + src * c, a.features + (src + 1) * c, x);
-        if constexpr (kEmbedding) {
-          Lanes8 vp, pe;
-          embedding(w, r, p1 + nv * 8, vp, pe);
-          store_lanes(x + c, pe);
-        }
         // The same four chains, each in halves.
         Lanes8 chain_lo[4] = {}, chain_hi[4] = {};
         int64_t cc = 0;
@@ -911,7 +908,7 @@ DYNSCOPE_ISA_CLONES void mlp_grad_rows_simd(const InferenceArgs& a, const float*
                                             float* d_feat, float* d_gate, float* dw,
                                             const MlpGradLayout& lay, int64_t begin, int64_t end,
                                             D d, float* scratch, int64_t* edges) {
-  if (wide_kernel_blocking()) {
+  if (wide_vector_registers()) {
     mlp_grad_rows<D, true>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
   } else {
     mlp_grad_rows<D, false>(a, grad, d_feat, d_gate, dw, lay, begin, end, d, scratch, edges);
